@@ -1,0 +1,137 @@
+// The controller's process image: everything the logic reads (InputImage) and writes
+// (OutputImage) in one scan. Both are fixed-size and trivially copyable so that drivers,
+// plants and the runtime can copy them without allocating, and so that a recorded sequence
+// of input images replays the logic bit-identically.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <type_traits>
+
+namespace fl {
+
+// ---------------------------------------------------------------- identifiers
+
+// Every motor-driven conveyor of the line (thesis section 5.3, figure 5.16), in flow order.
+enum class DriveId : std::uint8_t {
+  kBulk,             // belt under the mailbox hopper, speed regulated from the level sensor
+  kTakt,             // takt conveyor: standard speed, accelerates to pull a row out
+  kTransition1,      // speed transitions that pull the line apart
+  kTransition2,
+  kGuide,            // inclined belt with guiding rails, camera 1 at its end
+  kReject,           // belt after the flip plates; reverses to drop a fillet into the crate
+  kCentring,         // belt under camera 2 and the centring unit
+  kMultilane1Left,   // orienting unit 1: two side-by-side belts
+  kMultilane1Right,
+  kMultilane2Left,   // orienting unit 2
+  kMultilane2Right,
+  kSqueeze,          // belt under the squeeze roller and the final camera
+  kOutfeed,          // hands placed fillets to the portion cutter
+  kCount
+};
+inline constexpr std::size_t kDriveCount = static_cast<std::size_t>(DriveId::kCount);
+
+enum class CameraId : std::uint8_t {
+  kOrientation,  // camera 1, end of the guide section: hand, side, angle, singulation
+  kPosition,     // camera 2, before the centring unit: lateral position
+  kMultilane1,   // angle feedback on orienting unit 1 (about every 25 ms)
+  kMultilane2,
+  kFinal,        // final inspection after the squeeze roller
+  kCount
+};
+inline constexpr std::size_t kCameraCount = static_cast<std::size_t>(CameraId::kCount);
+
+inline constexpr std::size_t index(DriveId id) { return static_cast<std::size_t>(id); }
+inline constexpr std::size_t index(CameraId id) { return static_cast<std::size_t>(id); }
+
+enum class Hand : std::uint8_t { kUnknown, kLeft, kRight };
+enum class SideUp : std::uint8_t { kUnknown, kSkin, kBone };
+
+// ---------------------------------------------------------------- inputs
+
+// One fillet seen in one camera frame. Positions are in the camera's own belt-plane frame
+// (origin under the optical axis, x along travel, y to the left looking downstream): the
+// camera knows its calibration, not the line geometry. The controller maps them to line
+// coordinates with the camera's configured mounting position.
+struct FilletEstimate {
+  float x_mm = 0.0F;
+  float y_mm = 0.0F;
+  // Direction from the thick end to the tip, counter-clockwise from the travel direction
+  // seen from above, in (-pi, pi].
+  float angle_rad = 0.0F;
+  float confidence = 0.0F;  // 0..1
+  Hand hand = Hand::kUnknown;
+  SideUp side = SideUp::kUnknown;
+  bool singulated = false;  // false: touching or overlapping fillets in one blob
+};
+
+inline constexpr std::size_t kMaxEstimatesPerFrame = 8;
+
+// The newest frame of one camera. `sequence` increments per frame; the controller acts only
+// on a frame whose sequence it has not seen.
+struct CameraFrame {
+  std::int64_t frame_time_ns = 0;  // exposure time on the controller's clock
+  std::uint32_t sequence = 0;
+  std::uint8_t count = 0;  // valid entries in `estimates`
+  std::array<FilletEstimate, kMaxEstimatesPerFrame> estimates{};
+};
+
+struct DriveFeedback {
+  float speed_mps = 0.0F;            // measured belt surface speed
+  std::int64_t encoder_counts = 0;   // monotonic within a run; sign follows direction
+  bool ready = false;                // drive enabled and following its command
+  bool fault = false;                // drive reports a fault (CiA 402 fault state)
+};
+
+struct InputImage {
+  std::int64_t time_ns = 0;  // the cycle's time; logic never reads a clock of its own
+  std::array<DriveFeedback, kDriveCount> drives{};
+  std::array<CameraFrame, kCameraCount> cameras{};
+
+  bool takt_beam_broken = false;    // laser barrier at the end of the takt conveyor
+  float level_mm = 0.0F;            // layer height measured in front of the leveller
+  float hopper_opening_mm = 0.0F;   // cylinder position at the mailbox opening
+  float leveller_speed_rpm = 0.0F;
+  bool leveller_overload = false;   // blade jam or motor overload
+  bool flip_plate1_flipping = false;  // end switches: true = plate retracted (fillet flips)
+  bool flip_plate2_flipping = false;
+  float centring_position_mm = 0.0F;  // lateral position of the centring pusher
+  bool squeeze_roller_down = false;
+
+  bool estop_ok = false;  // safety chain closed
+  bool start_request = false;
+  bool stop_request = false;
+  bool fault_reset_request = false;
+};
+
+// ---------------------------------------------------------------- outputs
+
+struct DriveCommand {
+  bool enable = false;
+  float speed_mps = 0.0F;   // target surface speed, negative reverses
+  float accel_mps2 = 0.0F;  // ramp the drive must keep (within its configured limit)
+};
+
+enum class LineState : std::uint8_t { kStopped, kStarting, kRunning, kStopping, kFault };
+
+struct OutputImage {
+  std::array<DriveCommand, kDriveCount> drives{};
+  float hopper_opening_mm = 0.0F;
+  float leveller_speed_rpm = 0.0F;
+  bool flip_plate1_flip = false;  // true: retract plate 1 so the fillet flips end over end
+  bool flip_plate2_flip = false;  // true: retract plate 2 so the fillet flips sideways
+  // Lateral shift the centring unit applies to the fillet passing it; the unit strokes while
+  // centring_stroke is true and parks when it is false.
+  float centring_shift_mm = 0.0F;
+  bool centring_stroke = false;
+  bool squeeze_roller_down = false;
+  bool final_reject = false;  // air knife at the end that blows a fillet off the outfeed
+  LineState state = LineState::kStopped;
+  std::uint32_t active_faults = 0;  // bit set of FaultCode
+};
+
+static_assert(std::is_trivially_copyable_v<InputImage>);
+static_assert(std::is_trivially_copyable_v<OutputImage>);
+
+}  // namespace fl

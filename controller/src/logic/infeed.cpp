@@ -1,0 +1,142 @@
+// Stations upstream of the takt barrier and the takt itself.
+#include <algorithm>
+
+#include "stations.hpp"
+
+namespace fl::logic {
+
+void set_drive(OutputImage& out, DriveId drive, const LineConfig& config, float speed_mps,
+               bool enable) {
+  const DriveLimits& limits = config.limits[index(drive)];
+  DriveCommand& command = out.drives[index(drive)];
+  command.enable = enable;
+  command.speed_mps = enable ? std::clamp(speed_mps, -limits.max_speed_mps, limits.max_speed_mps)
+                             : 0.0F;
+  command.accel_mps2 = limits.max_accel_mps2;
+}
+
+void BulkFeedStation::reset() {
+  integral_mps_ = 0.0F;
+  starved_s_ = 0.0F;
+  unblock_remaining_s_ = 0.0F;
+}
+
+void BulkFeedStation::update(const ScanContext& ctx, OutputImage& out) {
+  const BulkConfig& bulk = config_.bulk;
+  out.hopper_opening_mm = bulk.hopper_opening_mm;
+  if (!ctx.infeed_enabled) {
+    integral_mps_ = 0.0F;
+    starved_s_ = 0.0F;
+    unblock_remaining_s_ = 0.0F;
+    set_drive(out, DriveId::kBulk, config_, 0.0F, ctx.running);
+    return;
+  }
+  const float error_mm = bulk.level_setpoint_mm - ctx.in.level_mm;
+  const float proportional_mps = bulk.level_kp_mps_per_mm * error_mm;
+  const float unclamped = proportional_mps + integral_mps_ + bulk.level_ki_mps_per_mm_s * error_mm * ctx.dt_s;
+  // Conditional integration: the integral only moves while the output is not saturated
+  // in the direction of the error (anti-windup).
+  const bool saturated_high = unclamped > bulk.max_speed_mps && error_mm > 0.0F;
+  const bool saturated_low = unclamped < bulk.min_speed_mps && error_mm < 0.0F;
+  if (!saturated_high && !saturated_low) {
+    integral_mps_ += bulk.level_ki_mps_per_mm_s * error_mm * ctx.dt_s;
+  }
+  const float speed_mps =
+      std::clamp(proportional_mps + integral_mps_, bulk.min_speed_mps, bulk.max_speed_mps);
+
+  // Starved: full bulk speed yet the level stays low, the hopper has bridged (thesis 6.1).
+  // Open the hopper wider for a moment to break the bridge.
+  const bool starved = ctx.in.level_mm < 0.5F * bulk.level_setpoint_mm &&
+                       speed_mps >= bulk.max_speed_mps * 0.999F;
+  starved_s_ = starved ? starved_s_ + ctx.dt_s : 0.0F;
+  if (starved_s_ >= bulk.starved_after_s && unblock_remaining_s_ <= 0.0F) {
+    unblock_remaining_s_ = bulk.unblock_duration_s;
+    starved_s_ = 0.0F;
+  }
+  if (unblock_remaining_s_ > 0.0F) {
+    out.hopper_opening_mm = bulk.hopper_unblock_opening_mm;
+    unblock_remaining_s_ -= ctx.dt_s;
+  }
+  set_drive(out, DriveId::kBulk, config_, speed_mps, true);
+}
+
+bool LevellerStation::update(const ScanContext& ctx, OutputImage& out) {
+  const LevellerConfig& leveller = config_.leveller;
+  if (!ctx.infeed_enabled) {
+    out.leveller_speed_rpm = 0.0F;
+    running_s_ = 0.0F;
+    return ctx.in.leveller_overload;
+  }
+  out.leveller_speed_rpm = leveller.speed_rpm;
+  running_s_ += ctx.dt_s;
+  const bool jammed =
+      running_s_ > leveller.spin_up_s && ctx.in.leveller_speed_rpm < leveller.min_running_rpm;
+  return jammed || ctx.in.leveller_overload;
+}
+
+void TaktStation::reset() {
+  phase_ = Phase::kIndex;
+  beam_stable_s_ = 0.0F;
+  since_stroke_s_ = 1e9F;
+  pulled_mm_ = 0.0F;
+}
+
+bool TaktStation::gap_clear(const ScanContext& ctx) const {
+  if (since_stroke_s_ < config_.takt.min_period_s) return false;
+  // The previous item must have moved min_gap past the barrier, else the next row would
+  // land on top of it.
+  for (const Item& item : ctx.tracker.items()) {
+    if (item.active && !item.adopted && item.s_mm < config_.takt.min_gap_mm &&
+        item.s_mm > -item.length_mm) {
+      return false;
+    }
+  }
+  return true;
+}
+
+void TaktStation::update(const ScanContext& ctx, OutputImage& out) {
+  const TaktConfig& takt = config_.takt;
+  since_stroke_s_ += ctx.dt_s;
+  beam_stable_s_ = ctx.in.takt_beam_broken ? beam_stable_s_ + ctx.dt_s : 0.0F;
+  if (!ctx.infeed_enabled) {
+    phase_ = Phase::kIndex;
+    set_drive(out, DriveId::kTakt, config_, 0.0F, ctx.running);
+    return;
+  }
+  const bool beam = beam_stable_s_ >= takt.beam_debounce_s;
+
+  if (phase_ == Phase::kPull) {
+    pulled_mm_ += ctx.tracker.travel_mm(DriveId::kTakt);
+    if (pulled_mm_ >= takt.pull_distance_mm) phase_ = Phase::kIndex;
+  }
+  if (phase_ == Phase::kIndex && beam) phase_ = Phase::kWaitGap;
+  if (phase_ == Phase::kWaitGap && gap_clear(ctx)) {
+    // The front of the row is at the barrier; its centre half a length behind.
+    Item* item = ctx.tracker.create(ctx.in.time_ns, -0.5F * config_.tracking.nominal_length_mm,
+                                    false);
+    ++ctx.counters.takt_strokes;
+    if (item != nullptr) {
+      ++ctx.counters.items_created;
+      ctx.events.push(Event{ctx.in.time_ns, EventCode::kItemCreated, item->id, 0, 0.0F});
+    }
+    phase_ = Phase::kPull;
+    pulled_mm_ = 0.0F;
+    since_stroke_s_ = 0.0F;
+  }
+
+  DriveCommand& command = out.drives[index(DriveId::kTakt)];
+  switch (phase_) {
+    case Phase::kIndex:
+      set_drive(out, DriveId::kTakt, config_, takt.standard_speed_mps, true);
+      break;
+    case Phase::kWaitGap:  // hold the row at the barrier until the line ahead is clear
+      set_drive(out, DriveId::kTakt, config_, 0.0F, true);
+      break;
+    case Phase::kPull:
+      set_drive(out, DriveId::kTakt, config_, takt.takt_speed_mps, true);
+      command.accel_mps2 = std::min(takt.takt_accel_mps2, command.accel_mps2);
+      break;
+  }
+}
+
+}  // namespace fl::logic
