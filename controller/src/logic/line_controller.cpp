@@ -134,16 +134,20 @@ struct LineController::Impl {
     if (in.fault_reset_request) ack_requested = true;
     step_state_machine(in);
 
+    // The overload contact acts in this scan; a jam seen from the blade speed in the next.
+    if (in.leveller_overload) set_fault(FaultCode::kLevellerOverload, true, in.time_ns, 0);
+
     const bool running = state == LineState::kStarting || state == LineState::kRunning ||
                          state == LineState::kStopping;
+    // The infeed stays off after a leveller fault until the operator acknowledges it.
     const bool infeed = state == LineState::kRunning &&
-                        (faults & fault_bit(FaultCode::kLevellerOverload)) == 0;
+                        ((faults | latched_faults) & fault_bit(FaultCode::kLevellerOverload)) == 0;
     ScanContext ctx{in, dt_s, running, infeed, tracker, events, records, counters};
     update_camera_faults(in, ctx);
 
     bulk.update(ctx, out);
     const bool leveller_fault = leveller.update(ctx, out);
-    if (leveller_fault) set_fault(FaultCode::kLevellerOverload, true, in.time_ns, 0);
+    set_fault(FaultCode::kLevellerOverload, leveller_fault, in.time_ns, 0);
     takt.update(ctx, out);
     for (DriveId drive : {DriveId::kTransition1, DriveId::kTransition2, DriveId::kCentring,
                           DriveId::kSqueeze, DriveId::kOutfeed}) {

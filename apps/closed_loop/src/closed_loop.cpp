@@ -1,0 +1,221 @@
+#include "fl/apps/closed_loop.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+namespace fl::apps {
+namespace {
+
+constexpr double kNsPerS = 1e9;
+
+bool in_spec(const LineConfig& config, const TrueFilletExit& exit) {
+  const ToleranceConfig& tolerance = config.tolerance;
+  const float target = (exit.hand == Hand::kLeft && tolerance.mirror_for_left)
+                           ? -tolerance.target_angle_rad
+                           : tolerance.target_angle_rad;
+  const float error = std::remainder(exit.angle_rad - target, 2.0F * 3.14159265F);
+  return exit.singulated && exit.side == config.flip.target_side &&
+         std::fabs(error) <= tolerance.angle_tol_rad &&
+         std::fabs(exit.y_mm) <= tolerance.lateral_tol_mm;
+}
+
+void tally(const LineConfig& config, const TrueFilletExit& exit, TruthTally& truth) {
+  ++truth.exits;
+  if (exit.singulated) ++truth.singulated_exits;
+  switch (exit.exit) {
+    case TrueExit::kOutfeed:
+      ++truth.outfeed;
+      if (in_spec(config, exit)) ++truth.outfeed_in_spec;
+      if (!exit.singulated) ++truth.outfeed_not_singulated;
+      if (!exit.squeezed_ok) ++truth.squeezed_badly;
+      break;
+    case TrueExit::kRejectCrate: ++truth.reject_crate; break;
+    case TrueExit::kFinalReject: ++truth.final_reject; break;
+    case TrueExit::kFellOff: ++truth.fell_off; break;
+  }
+}
+
+}  // namespace
+
+Kpis run_closed_loop(const LineConfig& config, Plant& plant, const RunOptions& options) {
+  Kpis kpis;
+  kpis.plant = plant.name();
+  kpis.seed = options.seed;
+  LineController controller(config);
+  DurationHistogram compute_histogram(100, 1'000'000);  // 0.1 us bins to 1 ms
+
+  InputImage in;
+  OutputImage out;
+  plant.reset(options.seed, in);
+  controller.reset();
+  controller.request_start();
+
+  const auto drain = [&] {
+    for (const TrueFilletExit& exit : plant.drain_exits()) tally(config, exit, kpis.truth);
+    while (auto record = controller.closed_records().pop()) {
+      if (options.on_record) options.on_record(*record);
+    }
+    while (auto event = controller.events().pop()) {
+      if (event->code == EventCode::kFaultRaised) kpis.faults_seen |= 1U << event->source;
+      if (options.on_event) options.on_event(*event);
+    }
+  };
+
+  const auto wall_start = std::chrono::steady_clock::now();
+  const auto feed_scans = static_cast<std::int64_t>(options.duration_s * kNsPerS / options.period_ns);
+  const auto drain_scans =
+      static_cast<std::int64_t>(options.drain_timeout_s * kNsPerS / options.period_ns);
+  const std::int64_t scans_per_second = static_cast<std::int64_t>(kNsPerS) / options.period_ns;
+  std::int64_t scan = 0;
+  bool stop_sent = false;
+  for (; scan < feed_scans + drain_scans; ++scan) {
+    if (scan == feed_scans) {
+      controller.request_stop();
+      stop_sent = true;
+    }
+    if (options.measure_compute) {
+      const auto start = std::chrono::steady_clock::now();
+      controller.update(in, out);
+      compute_histogram.record(
+          std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start)
+              .count());
+    } else {
+      controller.update(in, out);
+    }
+    plant.step(out, options.period_ns, in);
+    drain();
+    if (options.progress && scan % scans_per_second == 0) {
+      options.progress(static_cast<double>(scan) / scans_per_second, options.duration_s);
+    }
+    if (stop_sent && controller.state() == LineState::kStopped && plant.fillets_on_line() == 0) {
+      break;
+    }
+  }
+  // Whatever is still on the belts when the drain time is up stays accounted for.
+  controller.close_all_in_transit(in.time_ns, LostReason::kRunEnded);
+  drain();
+
+  kpis.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  kpis.fed_duration_s = options.duration_s;
+  kpis.total_simulated_s = static_cast<double>(scan) * options.period_ns / kNsPerS;
+  kpis.realtime_factor = kpis.wall_s > 0.0 ? kpis.total_simulated_s / kpis.wall_s : 0.0;
+  kpis.truth.fed = plant.fillets_fed();
+  kpis.truth.on_line_at_end = plant.fillets_on_line();
+  kpis.truth_balanced = kpis.truth.fed == kpis.truth.exits + kpis.truth.on_line_at_end;
+
+  const ControllerCounters& counters = controller.counters();
+  kpis.counters = counters;
+  kpis.items_created = counters.items_created;
+  kpis.items_closed = counters.items_closed;
+  kpis.outcomes = counters.outcomes;
+  kpis.records_dropped = controller.closed_records().dropped();
+  kpis.events_dropped = controller.events().dropped();
+  kpis.ledger_balanced = controller.tracked_count() == 0 && kpis.records_dropped == 0 &&
+                         counters.items_created + counters.items_adopted == counters.items_closed;
+
+  const double minutes = options.duration_s / 60.0;
+  kpis.placed_per_minute = minutes > 0.0 ? static_cast<double>(kpis.truth.outfeed) / minutes : 0.0;
+  kpis.items_per_minute = minutes > 0.0 ? static_cast<double>(counters.takt_strokes) / minutes : 0.0;
+  kpis.in_spec_share = kpis.truth.singulated_exits > 0
+                           ? static_cast<double>(kpis.truth.outfeed_in_spec) /
+                                 static_cast<double>(kpis.truth.singulated_exits)
+                           : 0.0;
+  kpis.compute = compute_histogram.summary();
+  return kpis;
+}
+
+nlohmann::json to_json(const Kpis& kpis) {
+  nlohmann::json outcomes = nlohmann::json::object();
+  for (std::size_t o = 0; o < kOutcomeCount; ++o) {
+    outcomes[to_string(static_cast<Outcome>(o))] = kpis.outcomes[o];
+  }
+  nlohmann::json faults = nlohmann::json::array();
+  for (std::size_t f = 0; f < static_cast<std::size_t>(FaultCode::kCount); ++f) {
+    if ((kpis.faults_seen & (1U << f)) != 0) faults.push_back(to_string(static_cast<FaultCode>(f)));
+  }
+  const TruthTally& t = kpis.truth;
+  const ControllerCounters& c = kpis.counters;
+  return {
+      {"plant", kpis.plant},
+      {"seed", kpis.seed},
+      {"fed_duration_s", kpis.fed_duration_s},
+      {"simulated_s", kpis.total_simulated_s},
+      {"wall_s", kpis.wall_s},
+      {"realtime_factor", kpis.realtime_factor},
+      {"placed_per_minute", kpis.placed_per_minute},
+      {"items_per_minute", kpis.items_per_minute},
+      {"in_spec_share_of_singulated", kpis.in_spec_share},
+      {"truth",
+       {{"fed", t.fed},
+        {"exits", t.exits},
+        {"on_line_at_end", t.on_line_at_end},
+        {"outfeed", t.outfeed},
+        {"outfeed_in_spec", t.outfeed_in_spec},
+        {"outfeed_not_singulated", t.outfeed_not_singulated},
+        {"reject_crate", t.reject_crate},
+        {"final_reject", t.final_reject},
+        {"fell_off", t.fell_off},
+        {"singulated_exits", t.singulated_exits},
+        {"squeezed_badly", t.squeezed_badly},
+        {"balanced", kpis.truth_balanced}}},
+      {"ledger",
+       {{"items_created", kpis.items_created},
+        {"items_adopted", kpis.counters.items_adopted},
+        {"items_closed", kpis.items_closed},
+        {"outcomes", outcomes},
+        {"records_dropped", kpis.records_dropped},
+        {"events_dropped", kpis.events_dropped},
+        {"balanced", kpis.ledger_balanced}}},
+      {"controller",
+       {{"scans", c.scans},
+        {"takt_strokes", c.takt_strokes},
+        {"reject_reversals", c.reject_reversals},
+        {"flip_conflicts", c.flip_conflicts},
+        {"frames_processed", c.frames_processed},
+        {"estimates_rejected", c.estimates_rejected},
+        {"detections_unmatched", c.detections_unmatched},
+        {"detections_duplicate", c.detections_duplicate},
+        {"faults_seen", faults}}},
+      {"cycle_compute_us",
+       {{"count", kpis.compute.count},
+        {"mean", kpis.compute.mean_ns / 1e3},
+        {"p50", static_cast<double>(kpis.compute.p50_ns) / 1e3},
+        {"p99", static_cast<double>(kpis.compute.p99_ns) / 1e3},
+        {"p999", static_cast<double>(kpis.compute.p999_ns) / 1e3},
+        {"max", static_cast<double>(kpis.compute.max_ns) / 1e3}}},
+  };
+}
+
+std::string format_kpis(const Kpis& kpis) {
+  std::ostringstream text;
+  const TruthTally& t = kpis.truth;
+  text.setf(std::ios::fixed);
+  text.precision(1);
+  text << "plant " << kpis.plant << ", seed " << kpis.seed << ", " << kpis.fed_duration_s
+       << " s fed + drain (" << kpis.total_simulated_s << " s simulated in " << kpis.wall_s
+       << " s wall, " << kpis.realtime_factor << "x real time)\n";
+  text << "throughput      " << kpis.placed_per_minute << " placed/min, " << kpis.items_per_minute
+       << " items/min at the takt\n";
+  text.precision(2);
+  text << "in spec         " << 100.0 * kpis.in_spec_share << " % of singulated fillets ("
+       << t.outfeed_in_spec << " of " << t.singulated_exits << ")\n";
+  text << "truth           fed " << t.fed << ", placed " << t.outfeed << ", crate " << t.reject_crate
+       << ", air knife " << t.final_reject << ", fell off " << t.fell_off
+       << ", unsingulated placed " << t.outfeed_not_singulated << ", on line " << t.on_line_at_end
+       << (kpis.truth_balanced ? " (balanced)" : " (UNBALANCED)") << "\n";
+  text << "ledger          items " << kpis.items_created << ", closed " << kpis.items_closed
+       << (kpis.ledger_balanced ? " (balanced)" : " (UNBALANCED)") << ":";
+  for (std::size_t o = 1; o < kOutcomeCount; ++o) {
+    if (kpis.outcomes[o] != 0) text << " " << to_string(static_cast<Outcome>(o)) << "=" << kpis.outcomes[o];
+  }
+  text << "\n";
+  text.precision(1);
+  text << "scan compute    p50 " << static_cast<double>(kpis.compute.p50_ns) / 1e3 << " us, p99.9 "
+       << static_cast<double>(kpis.compute.p999_ns) / 1e3 << " us, max "
+       << static_cast<double>(kpis.compute.max_ns) / 1e3 << " us\n";
+  return text.str();
+}
+
+}  // namespace fl::apps
