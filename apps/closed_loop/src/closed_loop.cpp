@@ -21,7 +21,15 @@ bool in_spec(const LineConfig& config, const TrueFilletExit& exit) {
          std::fabs(exit.y_mm) <= tolerance.lateral_tol_mm;
 }
 
-void tally(const LineConfig& config, const TrueFilletExit& exit, TruthTally& truth) {
+}  // namespace
+
+void KpiCollector::add_event(const Event& event) {
+  if (event.code == EventCode::kFaultRaised) faults_seen_ |= 1U << event.source;
+}
+
+void KpiCollector::add_exit(const TrueFilletExit& exit) {
+  const LineConfig& config = config_;
+  TruthTally& truth = truth_;
   ++truth.exits;
   if (exit.singulated) ++truth.singulated_exits;
   switch (exit.exit) {
@@ -31,13 +39,50 @@ void tally(const LineConfig& config, const TrueFilletExit& exit, TruthTally& tru
       if (!exit.singulated) ++truth.outfeed_not_singulated;
       if (!exit.squeezed_ok) ++truth.squeezed_badly;
       break;
-    case TrueExit::kRejectCrate: ++truth.reject_crate; break;
-    case TrueExit::kFinalReject: ++truth.final_reject; break;
-    case TrueExit::kFellOff: ++truth.fell_off; break;
+    case TrueExit::kRejectCrate:
+      ++truth.reject_crate;
+      break;
+    case TrueExit::kFinalReject:
+      ++truth.final_reject;
+      break;
+    case TrueExit::kFellOff:
+      ++truth.fell_off;
+      break;
   }
 }
 
-}  // namespace
+void KpiCollector::finish(const LineController& controller, std::uint64_t fed,
+                          std::uint64_t on_line, double fed_duration_s, double simulated_s,
+                          double wall_s, Kpis& kpis) const {
+  kpis.truth = truth_;
+  kpis.faults_seen = faults_seen_;
+  kpis.wall_s = wall_s;
+  kpis.fed_duration_s = fed_duration_s;
+  kpis.total_simulated_s = simulated_s;
+  kpis.realtime_factor = wall_s > 0.0 ? simulated_s / wall_s : 0.0;
+  kpis.truth.fed = fed;
+  kpis.truth.on_line_at_end = on_line;
+  kpis.truth_balanced = kpis.truth.fed == kpis.truth.exits + kpis.truth.on_line_at_end;
+
+  const ControllerCounters& counters = controller.counters();
+  kpis.counters = counters;
+  kpis.items_created = counters.items_created;
+  kpis.items_closed = counters.items_closed;
+  kpis.outcomes = counters.outcomes;
+  kpis.records_dropped = controller.records_dropped();
+  kpis.events_dropped = controller.events_dropped();
+  kpis.ledger_balanced = controller.tracked_count() == 0 && kpis.records_dropped == 0 &&
+                         counters.items_created + counters.items_adopted == counters.items_closed;
+
+  const double minutes = fed_duration_s / 60.0;
+  kpis.placed_per_minute = minutes > 0.0 ? static_cast<double>(kpis.truth.outfeed) / minutes : 0.0;
+  kpis.items_per_minute =
+      minutes > 0.0 ? static_cast<double>(counters.takt_strokes) / minutes : 0.0;
+  kpis.in_spec_share = kpis.truth.singulated_exits > 0
+                           ? static_cast<double>(kpis.truth.outfeed_in_spec) /
+                                 static_cast<double>(kpis.truth.singulated_exits)
+                           : 0.0;
+}
 
 Kpis run_closed_loop(const LineConfig& config, Plant& plant, const RunOptions& options) {
   Kpis kpis;
@@ -52,21 +97,23 @@ Kpis run_closed_loop(const LineConfig& config, Plant& plant, const RunOptions& o
   controller.reset();
   controller.request_start();
 
+  KpiCollector collector(config);
   const auto drain = [&] {
-    for (const TrueFilletExit& exit : plant.drain_exits()) tally(config, exit, kpis.truth);
+    for (const TrueFilletExit& exit : plant.drain_exits()) collector.add_exit(exit);
     while (auto record = controller.closed_records().pop()) {
       if (options.on_record) options.on_record(*record);
     }
     while (auto event = controller.events().pop()) {
-      if (event->code == EventCode::kFaultRaised) kpis.faults_seen |= 1U << event->source;
+      collector.add_event(*event);
       if (options.on_event) options.on_event(*event);
     }
   };
 
   const auto wall_start = std::chrono::steady_clock::now();
-  const auto feed_scans = static_cast<std::int64_t>(options.duration_s * kNsPerS / options.period_ns);
+  const auto period_s = static_cast<double>(options.period_ns) / kNsPerS;
+  const auto feed_scans = static_cast<std::int64_t>(std::llround(options.duration_s / period_s));
   const auto drain_scans =
-      static_cast<std::int64_t>(options.drain_timeout_s * kNsPerS / options.period_ns);
+      static_cast<std::int64_t>(std::llround(options.drain_timeout_s / period_s));
   const std::int64_t scans_per_second = static_cast<std::int64_t>(kNsPerS) / options.period_ns;
   std::int64_t scan = 0;
   bool stop_sent = false;
@@ -78,16 +125,16 @@ Kpis run_closed_loop(const LineConfig& config, Plant& plant, const RunOptions& o
     if (options.measure_compute) {
       const auto start = std::chrono::steady_clock::now();
       controller.update(in, out);
-      compute_histogram.record(
-          std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - start)
-              .count());
+      compute_histogram.record(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                   std::chrono::steady_clock::now() - start)
+                                   .count());
     } else {
       controller.update(in, out);
     }
     plant.step(out, options.period_ns, in);
     drain();
     if (options.progress && scan % scans_per_second == 0) {
-      options.progress(static_cast<double>(scan) / scans_per_second, options.duration_s);
+      options.progress(static_cast<double>(scan) * period_s, options.duration_s);
     }
     if (stop_sent && controller.state() == LineState::kStopped && plant.fillets_on_line() == 0) {
       break;
@@ -97,31 +144,10 @@ Kpis run_closed_loop(const LineConfig& config, Plant& plant, const RunOptions& o
   controller.close_all_in_transit(in.time_ns, LostReason::kRunEnded);
   drain();
 
-  kpis.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  kpis.fed_duration_s = options.duration_s;
-  kpis.total_simulated_s = static_cast<double>(scan) * options.period_ns / kNsPerS;
-  kpis.realtime_factor = kpis.wall_s > 0.0 ? kpis.total_simulated_s / kpis.wall_s : 0.0;
-  kpis.truth.fed = plant.fillets_fed();
-  kpis.truth.on_line_at_end = plant.fillets_on_line();
-  kpis.truth_balanced = kpis.truth.fed == kpis.truth.exits + kpis.truth.on_line_at_end;
-
-  const ControllerCounters& counters = controller.counters();
-  kpis.counters = counters;
-  kpis.items_created = counters.items_created;
-  kpis.items_closed = counters.items_closed;
-  kpis.outcomes = counters.outcomes;
-  kpis.records_dropped = controller.closed_records().dropped();
-  kpis.events_dropped = controller.events().dropped();
-  kpis.ledger_balanced = controller.tracked_count() == 0 && kpis.records_dropped == 0 &&
-                         counters.items_created + counters.items_adopted == counters.items_closed;
-
-  const double minutes = options.duration_s / 60.0;
-  kpis.placed_per_minute = minutes > 0.0 ? static_cast<double>(kpis.truth.outfeed) / minutes : 0.0;
-  kpis.items_per_minute = minutes > 0.0 ? static_cast<double>(counters.takt_strokes) / minutes : 0.0;
-  kpis.in_spec_share = kpis.truth.singulated_exits > 0
-                           ? static_cast<double>(kpis.truth.outfeed_in_spec) /
-                                 static_cast<double>(kpis.truth.singulated_exits)
-                           : 0.0;
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  collector.finish(controller, plant.fillets_fed(), plant.fillets_on_line(), options.duration_s,
+                   static_cast<double>(scan) * period_s, wall_s, kpis);
   kpis.compute = compute_histogram.summary();
   return kpis;
 }
@@ -201,14 +227,15 @@ std::string format_kpis(const Kpis& kpis) {
   text.precision(2);
   text << "in spec         " << 100.0 * kpis.in_spec_share << " % of singulated fillets ("
        << t.outfeed_in_spec << " of " << t.singulated_exits << ")\n";
-  text << "truth           fed " << t.fed << ", placed " << t.outfeed << ", crate " << t.reject_crate
-       << ", air knife " << t.final_reject << ", fell off " << t.fell_off
+  text << "truth           fed " << t.fed << ", placed " << t.outfeed << ", crate "
+       << t.reject_crate << ", air knife " << t.final_reject << ", fell off " << t.fell_off
        << ", unsingulated placed " << t.outfeed_not_singulated << ", on line " << t.on_line_at_end
        << (kpis.truth_balanced ? " (balanced)" : " (UNBALANCED)") << "\n";
   text << "ledger          items " << kpis.items_created << ", closed " << kpis.items_closed
        << (kpis.ledger_balanced ? " (balanced)" : " (UNBALANCED)") << ":";
   for (std::size_t o = 1; o < kOutcomeCount; ++o) {
-    if (kpis.outcomes[o] != 0) text << " " << to_string(static_cast<Outcome>(o)) << "=" << kpis.outcomes[o];
+    if (kpis.outcomes[o] != 0)
+      text << " " << to_string(static_cast<Outcome>(o)) << "=" << kpis.outcomes[o];
   }
   text << "\n";
   text.precision(1);

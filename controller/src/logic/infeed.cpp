@@ -10,8 +10,8 @@ void set_drive(OutputImage& out, DriveId drive, const LineConfig& config, float 
   const DriveLimits& limits = config.limits[index(drive)];
   DriveCommand& command = out.drives[index(drive)];
   command.enable = enable;
-  command.speed_mps = enable ? std::clamp(speed_mps, -limits.max_speed_mps, limits.max_speed_mps)
-                             : 0.0F;
+  command.speed_mps =
+      enable ? std::clamp(speed_mps, -limits.max_speed_mps, limits.max_speed_mps) : 0.0F;
   command.accel_mps2 = limits.max_accel_mps2;
 }
 
@@ -33,7 +33,8 @@ void BulkFeedStation::update(const ScanContext& ctx, OutputImage& out) {
   }
   const float error_mm = bulk.level_setpoint_mm - ctx.in.level_mm;
   const float proportional_mps = bulk.level_kp_mps_per_mm * error_mm;
-  const float unclamped = proportional_mps + integral_mps_ + bulk.level_ki_mps_per_mm_s * error_mm * ctx.dt_s;
+  const float unclamped =
+      proportional_mps + integral_mps_ + bulk.level_ki_mps_per_mm_s * error_mm * ctx.dt_s;
   // Conditional integration: the integral only moves while the output is not saturated
   // in the direction of the error (anti-windup).
   const bool saturated_high = unclamped > bulk.max_speed_mps && error_mm > 0.0F;
@@ -46,8 +47,8 @@ void BulkFeedStation::update(const ScanContext& ctx, OutputImage& out) {
 
   // Starved: full bulk speed yet the level stays low, the hopper has bridged (thesis 6.1).
   // Open the hopper wider for a moment to break the bridge.
-  const bool starved = ctx.in.level_mm < 0.5F * bulk.level_setpoint_mm &&
-                       speed_mps >= bulk.max_speed_mps * 0.999F;
+  const bool starved =
+      ctx.in.level_mm < 0.5F * bulk.level_setpoint_mm && speed_mps >= bulk.max_speed_mps * 0.999F;
   starved_s_ = starved ? starved_s_ + ctx.dt_s : 0.0F;
   if (starved_s_ >= bulk.starved_after_s && unblock_remaining_s_ <= 0.0F) {
     unblock_remaining_s_ = bulk.unblock_duration_s;
@@ -77,6 +78,8 @@ bool LevellerStation::update(const ScanContext& ctx, OutputImage& out) {
 void TaktStation::reset() {
   phase_ = Phase::kIndex;
   beam_stable_s_ = 0.0F;
+  beam_clear_s_ = 0.0F;
+  armed_ = true;
   since_stroke_s_ = 1e9F;
   pulled_mm_ = 0.0F;
 }
@@ -98,7 +101,18 @@ void TaktStation::update(const ScanContext& ctx, OutputImage& out) {
   const TaktConfig& takt = config_.takt;
   since_stroke_s_ += ctx.dt_s;
   beam_stable_s_ = ctx.in.takt_beam_broken ? beam_stable_s_ + ctx.dt_s : 0.0F;
+  beam_clear_s_ = ctx.in.takt_beam_broken ? 0.0F : beam_clear_s_ + ctx.dt_s;
+  if (beam_clear_s_ >= takt.beam_debounce_s) armed_ = true;
   if (!ctx.infeed_enabled) {
+    // A stroke in progress finishes, so that the item it created leaves the takt belt
+    // instead of waiting on it, tracked, until the next start.
+    if (phase_ == Phase::kPull && ctx.running) {
+      pulled_mm_ += ctx.tracker.travel_mm(DriveId::kTakt);
+      if (pulled_mm_ < takt.pull_distance_mm) {
+        set_drive(out, DriveId::kTakt, config_, takt.takt_speed_mps, true);
+        return;
+      }
+    }
     phase_ = Phase::kIndex;
     set_drive(out, DriveId::kTakt, config_, 0.0F, ctx.running);
     return;
@@ -109,17 +123,18 @@ void TaktStation::update(const ScanContext& ctx, OutputImage& out) {
     pulled_mm_ += ctx.tracker.travel_mm(DriveId::kTakt);
     if (pulled_mm_ >= takt.pull_distance_mm) phase_ = Phase::kIndex;
   }
-  if (phase_ == Phase::kIndex && beam) phase_ = Phase::kWaitGap;
+  if (phase_ == Phase::kIndex && beam && armed_) phase_ = Phase::kWaitGap;
   if (phase_ == Phase::kWaitGap && gap_clear(ctx)) {
     // The front of the row is at the barrier; its centre half a length behind.
-    Item* item = ctx.tracker.create(ctx.in.time_ns, -0.5F * config_.tracking.nominal_length_mm,
-                                    false);
+    Item* item =
+        ctx.tracker.create(ctx.in.time_ns, -0.5F * config_.tracking.nominal_length_mm, false);
     ++ctx.counters.takt_strokes;
     if (item != nullptr) {
       ++ctx.counters.items_created;
       ctx.events.push(Event{ctx.in.time_ns, EventCode::kItemCreated, item->id, 0, 0.0F});
     }
     phase_ = Phase::kPull;
+    armed_ = false;
     pulled_mm_ = 0.0F;
     since_stroke_s_ = 0.0F;
   }

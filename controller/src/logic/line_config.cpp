@@ -9,17 +9,17 @@ LineConfig default_line_config() {
   };
   // Product path, s = 0 at the takt barrier. Belts get faster downstream so that each
   // transfer pulls the items further apart (thesis 5.2.3, speed transitions).
-  section(DriveId::kTakt, -600.0F, 0.0F, 0.08F);
+  section(DriveId::kTakt, -600.0F, 0.0F, 0.12F);
   section(DriveId::kTransition1, 0.0F, 500.0F, 0.30F);
   section(DriveId::kTransition2, 500.0F, 1000.0F, 0.45F);
   section(DriveId::kGuide, 1000.0F, 2000.0F, 0.50F);
   // 2000..2200: the two flip plates, passive slides between guide and reject belt.
   section(DriveId::kReject, 2200.0F, 2800.0F, 0.50F);
   section(DriveId::kCentring, 2800.0F, 3400.0F, 0.50F);
-  section(DriveId::kMultilane1Left, 3400.0F, 3800.0F, 0.40F);
-  section(DriveId::kMultilane2Left, 3800.0F, 4200.0F, 0.40F);
-  section(DriveId::kSqueeze, 4200.0F, 4900.0F, 0.40F);
-  section(DriveId::kOutfeed, 4900.0F, 5500.0F, 0.40F);
+  section(DriveId::kMultilane1Left, 3400.0F, 3800.0F, 0.60F);
+  section(DriveId::kMultilane2Left, 3800.0F, 4200.0F, 0.60F);
+  section(DriveId::kSqueeze, 4200.0F, 4900.0F, 0.50F);
+  section(DriveId::kOutfeed, 4900.0F, 5500.0F, 0.50F);
   config.placed_at_s_mm = 5500.0F;
   config.takt_belt_length_mm = 600.0F;
 

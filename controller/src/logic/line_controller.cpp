@@ -21,8 +21,9 @@ constexpr float kStopDrainTimeoutS = 30.0F;
 constexpr float kSilentPeriods = 5.0F;
 // Faults that stop the whole line; the others degrade it (their reactions reject items).
 constexpr std::uint32_t kLineStoppingFaults = fault_bit(FaultCode::kEstop) |
-                                               fault_bit(FaultCode::kDriveFault) |
-                                               fault_bit(FaultCode::kTrackerOverflow);
+                                              fault_bit(FaultCode::kDriveFault) |
+                                              fault_bit(FaultCode::kTrackerOverflow) |
+                                              fault_bit(FaultCode::kCycleOverrun);
 }  // namespace
 
 struct LineController::Impl {
@@ -85,13 +86,15 @@ struct LineController::Impl {
     for (std::size_t c = 0; c < kCameraCount; ++c) {
       const auto camera = static_cast<CameraId>(c);
       const logic::FrameIntake intake = tracker.ingest(in, camera, events);
-      if (intake.flooded) set_fault(FaultCode::kEstimateFlood, true, in.time_ns, static_cast<std::uint8_t>(c));
+      if (intake.flooded)
+        set_fault(FaultCode::kEstimateFlood, true, in.time_ns, static_cast<std::uint8_t>(c));
       const CameraMount& mount = config.cameras[c];
       const float silent_after_s = std::max(mount.max_age_s, kSilentPeriods * mount.period_s);
       // Before a camera's first frame, silence counts from the start of running.
-      const float silence_s = tracker.camera_has_delivered(camera)
-                                  ? static_cast<float>(in.time_ns - tracker.last_frame_time_ns(camera)) / kNsPerS
-                                  : (state == LineState::kRunning ? state_time_s : 0.0F);
+      const float silence_s =
+          tracker.camera_has_delivered(camera)
+              ? static_cast<float>(in.time_ns - tracker.last_frame_time_ns(camera)) / kNsPerS
+              : (state == LineState::kRunning ? state_time_s : 0.0F);
       if (ctx.running && silence_s > silent_after_s) {
         if (!any_silent) silent_camera = static_cast<std::uint8_t>(c);
         any_silent = true;
@@ -110,6 +113,7 @@ struct LineController::Impl {
     last_time_ns = in.time_ns;
     state_time_s += dt_s;
     out = OutputImage{};
+    detect_overrun(dt_s, in.time_ns);
 
     tracker.advance(in);
 
@@ -151,7 +155,8 @@ struct LineController::Impl {
     takt.update(ctx, out);
     for (DriveId drive : {DriveId::kTransition1, DriveId::kTransition2, DriveId::kCentring,
                           DriveId::kSqueeze, DriveId::kOutfeed}) {
-      logic::set_drive(out, drive, config, config.sections[index(drive)].nominal_speed_mps, running);
+      logic::set_drive(out, drive, config, config.sections[index(drive)].nominal_speed_mps,
+                       running);
     }
     flip.update(ctx, out);
     bool hold_guide = false;
@@ -178,7 +183,10 @@ struct LineController::Impl {
     }
     out.state = state;
     out.active_faults = faults | latched_faults;
+    refresh_counters();
+  }
 
+  void refresh_counters() {
     counters.outcomes = tracker.outcome_counts();
     counters.items_closed = closed_total();
     counters.estimates_rejected = tracker.rejected_estimates();
@@ -186,6 +194,20 @@ struct LineController::Impl {
     counters.detections_duplicate = tracker.duplicate_detections();
     counters.frames_processed = tracker.frames_processed();
     counters.items_adopted = tracker.adopted();
+  }
+
+  // The runtime passes the scheduled time, so a scan that skipped periods shows as a time
+  // step longer than the period: deterministic, and the same in simulation.
+  void detect_overrun(float dt_s, std::int64_t time_ns) {
+    const float period_s = config.watchdog.cycle_period_s;
+    if (dt_s > 1.5F * period_s) {
+      ++counters.overruns;
+      ++consecutive_overruns;
+    } else if (dt_s > 0.0F) {
+      consecutive_overruns = 0;
+    }
+    set_fault(FaultCode::kCycleOverrun,
+              consecutive_overruns >= config.watchdog.overrun_fault_cycles, time_ns, 0);
   }
 
   std::uint64_t closed_total() const {
@@ -251,6 +273,7 @@ struct LineController::Impl {
   std::uint32_t faults = 0;
   std::uint32_t latched_faults = 0;
   std::uint64_t overflows_seen = 0;
+  std::int32_t consecutive_overruns = 0;
   float state_time_s = 0.0F;
   std::int64_t last_time_ns = 0;
   bool first_scan = true;
@@ -277,14 +300,16 @@ const ControllerCounters& LineController::counters() const { return impl_->count
 std::size_t LineController::tracked_count() const { return impl_->tracker.active_count(); }
 RecordRing& LineController::closed_records() { return impl_->records; }
 EventRing& LineController::events() { return impl_->events; }
+std::uint64_t LineController::records_dropped() const { return impl_->records.dropped(); }
+std::uint64_t LineController::events_dropped() const { return impl_->events.dropped(); }
 
 std::size_t LineController::tracked_items(std::span<TrackedItemView> out) const {
   std::size_t count = 0;
   for (const Item& item : impl_->tracker.items()) {
     if (!item.active || count == out.size()) continue;
-    out[count++] = TrackedItemView{item.id,         item.s_mm,          item.y_mm,
-                                   item.angle_rad,  item.angle_known,   item.reject_pending,
-                                   item.multilane_unit};
+    out[count++] =
+        TrackedItemView{item.id,          item.s_mm,           item.y_mm,          item.angle_rad,
+                        item.angle_known, item.reject_pending, item.multilane_unit};
   }
   return count;
 }
@@ -295,6 +320,7 @@ void LineController::close_all_in_transit(std::int64_t time_ns, LostReason reaso
       impl_->tracker.close(item, time_ns, Outcome::kLost, reason, impl_->records, impl_->events);
     }
   }
+  impl_->refresh_counters();
 }
 
 }  // namespace fl

@@ -24,16 +24,16 @@ UnitCommand orient_command(const MultilaneConfig& config, const DriveLimits& lim
   // Fastest rate from which the turn can still stop at the target (bang-bang envelope),
   // so the loop arrives without overshoot despite the ramp.
   const float braking_rate_radps = std::sqrt(2.0F * max_turn_accel_radps2 * std::fabs(error_rad));
-  const float rate_radps = std::copysign(
-      std::min({config.angle_gain_per_s * std::fabs(error_rad), braking_rate_radps, max_rate_radps}),
-      error_rad);
+  const float rate_radps = std::copysign(std::min({config.angle_gain_per_s * std::fabs(error_rad),
+                                                   braking_rate_radps, max_rate_radps}),
+                                         error_rad);
   // Counter-clockwise (positive) turns need the right belt (y < 0 side) faster.
   const float half_differential_mps = 0.5F * rate_radps * track_m;
   UnitCommand command;
-  command.left_mps = std::clamp(config.common_speed_mps - half_differential_mps, 0.0F,
-                                limits.max_speed_mps);
-  command.right_mps = std::clamp(config.common_speed_mps + half_differential_mps, 0.0F,
-                                 limits.max_speed_mps);
+  command.left_mps =
+      std::clamp(config.common_speed_mps - half_differential_mps, 0.0F, limits.max_speed_mps);
+  command.right_mps =
+      std::clamp(config.common_speed_mps + half_differential_mps, 0.0F, limits.max_speed_mps);
   return command;
 }
 
@@ -110,7 +110,8 @@ void MultilaneStation::update(const ScanContext& ctx, OutputImage& out) {
       item.measured_angle_new = false;
       item.angle_rad = item.measured_angle_rad;
       if (unit >= 0) {
-        item.angle_rad += rotation_since_rad(static_cast<std::size_t>(unit), item.measured_angle_ns);
+        item.angle_rad +=
+            rotation_since_rad(static_cast<std::size_t>(unit), item.measured_angle_ns);
       }
       item.angle_rad = wrap_angle(item.angle_rad);
       item.angle_known = true;

@@ -18,24 +18,27 @@ float rear_s_mm(const Item& item) {
 
 void SqueezeStation::update(const ScanContext& ctx, OutputImage& out) {
   const SqueezeConfig& squeeze = config_.squeeze;
-  // The roller must clear a thickest section by this much, so that it presses the thinner
-  // part behind it and never rides up the thick one.
-  constexpr float kClearanceMm = 8.0F;
+  // The roller must clear a thickest section by this much (tracking error plus the spread
+  // of fillet lengths around the nominal one), so it never rides up the thick part.
+  constexpr float kClearanceMm = 15.0F;
   const float speed_mps = ctx.in.drives[index(DriveId::kSqueeze)].speed_mps;
-  // Positions predicted at the moment the roller arrives, one actuation time ahead.
-  const float lead_mm = 1000.0F * std::max(speed_mps, 0.0F) * squeeze.actuation_s;
+  // Where items will be when a lift commanded now has taken effect.
+  const float lift_lead_mm = 1000.0F * std::max(speed_mps, 0.0F) * squeeze.actuation_s;
   bool down = false;
   bool must_be_up = false;
   for (const Item& item : ctx.tracker.items()) {
     if (!item.active) continue;
-    const float thickest_mm = thickest_section_s_mm(item, squeeze.thickest_from_rear) + lead_mm;
-    const float rear_mm = rear_s_mm(item) + lead_mm;
-    if (thickest_mm >= squeeze.roller_s_mm + kClearanceMm && rear_mm < squeeze.roller_s_mm) {
+    const float thickest_mm = thickest_section_s_mm(item, squeeze.thickest_from_rear);
+    // Lowering waits until the thickest section is past now: the roller then touches down
+    // behind it whatever its travel time, and presses the rest flat.
+    if (thickest_mm >= squeeze.roller_s_mm + kClearanceMm && rear_s_mm(item) < squeeze.roller_s_mm) {
       down = true;
     }
-    // A thickest section about to arrive under the roller overrides: up, or it jams.
+    // A thickest section that will be under the roller before a lift completes overrides:
+    // up, or the fillet jams behind it.
+    const float thickest_ahead_mm = thickest_mm + lift_lead_mm;
     if (thickest_mm < squeeze.roller_s_mm + kClearanceMm &&
-        thickest_mm > squeeze.roller_s_mm - item.length_mm) {
+        thickest_ahead_mm > squeeze.roller_s_mm - item.length_mm) {
       must_be_up = true;
     }
   }
@@ -98,8 +101,8 @@ void FinalStation::update(const ScanContext& ctx, OutputImage& out) {
         ctx.tracker.close(item, ctx.in.time_ns, Outcome::kLost, LostReason::kNotSeenByCamera,
                           ctx.records, ctx.events);
       } else {
-        ctx.tracker.close(item, ctx.in.time_ns, item.reject_reason, LostReason::kNone,
-                          ctx.records, ctx.events);
+        ctx.tracker.close(item, ctx.in.time_ns, item.reject_reason, LostReason::kNone, ctx.records,
+                          ctx.events);
       }
       continue;
     }

@@ -14,8 +14,8 @@ namespace fl::logic {
 struct ScanContext {
   const InputImage& in;
   float dt_s;
-  bool running;          // line in the running state
-  bool infeed_enabled;   // bulk, leveller and takt may feed (off while stopping or on overload)
+  bool running;         // line in the running state
+  bool infeed_enabled;  // bulk, leveller and takt may feed (off while stopping or on overload)
   Tracker& tracker;
   EventRing& events;
   RecordRing& records;
@@ -67,6 +67,10 @@ class TaktStation {
   const LineConfig& config_;
   Phase phase_ = Phase::kIndex;
   float beam_stable_s_ = 0.0F;
+  float beam_clear_s_ = 0.0F;
+  // A stroke needs the beam to have been clear since the last one: the pulled fillet's
+  // tail keeps the beam broken for a while, and must not count as the next row.
+  bool armed_ = true;
   float since_stroke_s_ = 1e9F;
   float pulled_mm_ = 0.0F;
 };

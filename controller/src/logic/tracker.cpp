@@ -197,10 +197,11 @@ FrameIntake Tracker::ingest(const InputImage& in, CameraId camera, EventRing& ev
       emit(events, in.time_ns, EventCode::kEstimateNotFinite, 0, source, 0.0F);
       continue;
     }
-    const bool in_range = std::fabs(estimate.x_mm) <= 0.5F * mount.field_of_view_mm + kFieldOfViewMarginMm &&
-                          std::fabs(estimate.y_mm) <= kMaxLateralMm && estimate.confidence >= 0.0F &&
-                          estimate.confidence <= 1.0F &&
-                          std::fabs(estimate.angle_rad) <= std::numbers::pi_v<float> + kAngleSlackRad;
+    const bool in_range =
+        std::fabs(estimate.x_mm) <= 0.5F * mount.field_of_view_mm + kFieldOfViewMarginMm &&
+        std::fabs(estimate.y_mm) <= kMaxLateralMm && estimate.confidence >= 0.0F &&
+        estimate.confidence <= 1.0F &&
+        std::fabs(estimate.angle_rad) <= std::numbers::pi_v<float> + kAngleSlackRad;
     if (!in_range) {
       ++intake.rejected;
       emit(events, in.time_ns, EventCode::kEstimateOutOfRange, 0, source, estimate.x_mm);
@@ -211,9 +212,8 @@ FrameIntake Tracker::ingest(const InputImage& in, CameraId camera, EventRing& ev
     s_now += 1000.0F * speed_at_mps(in, s_now) * age_s;
 
     Item* item = nearest_item(s_now, config_.tracking.match_gate_mm);
-    if (item != nullptr &&
-        std::find(matched_ids.begin(), matched_ids.begin() + matched_count, item->id) !=
-            matched_ids.begin() + matched_count) {
+    if (item != nullptr && std::find(matched_ids.begin(), matched_ids.begin() + matched_count,
+                                     item->id) != matched_ids.begin() + matched_count) {
       ++duplicates_;
       emit(events, in.time_ns, EventCode::kDuplicateDetection, item->id, source, estimate.x_mm);
       // A second blob on one item means the camera saw two fillets there.

@@ -27,8 +27,8 @@ inline float wrap_angle(float angle_rad) {
 // Confidence-weighted votes and running means over the frames in which a camera saw an item.
 struct CameraEvidence {
   std::uint16_t frames = 0;
-  float hand_vote = 0.0F;        // + right, - left
-  float side_vote = 0.0F;        // + skin, - bone
+  float hand_vote = 0.0F;  // + right, - left
+  float side_vote = 0.0F;  // + skin, - bone
   float not_singulated_weight = 0.0F;
   float singulated_weight = 0.0F;
   float confidence_sum = 0.0F;
@@ -56,7 +56,7 @@ struct Item {
   bool angle_known = false;
   Hand hand = Hand::kUnknown;
   SideUp side = SideUp::kUnknown;  // current side up (after planned flips)
-  bool adopted = false;  // created from an unmatched detection, not by the takt
+  bool adopted = false;            // created from an unmatched detection, not by the takt
   bool classified = false;
   bool reject_pending = false;
   Outcome reject_reason = Outcome::kInTransit;

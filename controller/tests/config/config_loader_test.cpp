@@ -232,7 +232,7 @@ TEST(LineConfigFile, AnglesAreConvertedFromDegrees) {
 
 TEST(LineConfigErrors, TypoIsUnknownKeyAndTheRealKeyIsMissing) {
   const std::string text =
-      replaced(reference_text(), "  min_period_s: 0.85", "  min_perod_s: 0.85");
+      replaced(reference_text(), "  min_period_s: 0.9", "  min_perod_s: 0.9");
   const ConfigError error = parse_error(text);
   const std::string message = error.what();
   const int line = line_of(text, "min_perod_s");
@@ -305,7 +305,7 @@ TEST(LineConfigErrors, SpeedAboveDriveLimit) {
 TEST(LineConfigErrors, BadIndentationIsSyntaxError) {
   // One space more than its siblings: yaml-cpp reads it as a value that cannot be a map.
   const std::string text =
-      replaced(reference_text(), "  min_gap_mm: 350.0", "   min_gap_mm: 350.0");
+      replaced(reference_text(), "  min_gap_mm: 200.0", "   min_gap_mm: 200.0");
   const ConfigError error = parse_error(text);
   EXPECT_THAT(error.what(),
               HasSubstr("line.yaml:" + std::to_string(line_of(text, "min_gap_mm")) + ":"));
@@ -409,7 +409,7 @@ TEST(LineConfigErrors, BadEnumValue) {
 
 TEST(LineConfigErrors, MultipleProblemsAreAllReported) {
   std::string text = reference_text();
-  text = replaced(text, "  min_period_s: 0.85", "  min_perod_s: 0.85");            // 2 problems
+  text = replaced(text, "  min_period_s: 0.9", "  min_perod_s: 0.9");            // 2 problems
   text = replaced(text, "  reverse_speed_mps: 0.5", "  reverse_speed_mps: -0.5");  // 1
   text = replaced(text, "  target_side: bone", "  target_side: bones");            // 1
   text = replaced(text, "  lateral_tol_mm: 20.0\n", "");                           // 1

@@ -50,7 +50,8 @@ TEST(Leveller, JamIsDetectedAfterSpinUp) {
   LevellerStation station(h.config);
   h.in.leveller_speed_rpm = 0.0F;  // blades not turning
   const int spin_up_scans = static_cast<int>(h.config.leveller.spin_up_s / 0.01F);
-  for (int scan = 0; scan < spin_up_scans - 1; ++scan) EXPECT_FALSE(station.update(h.context(), h.out));
+  for (int scan = 0; scan < spin_up_scans - 1; ++scan)
+    EXPECT_FALSE(station.update(h.context(), h.out));
   bool jammed = false;
   for (int scan = 0; scan < 5; ++scan) jammed = station.update(h.context(), h.out);
   EXPECT_TRUE(jammed);
@@ -98,9 +99,12 @@ TEST_F(TaktTest, NextRowWaitsUntilThePreviousItemIsClear) {
   h.in.takt_beam_broken = true;
   for (int i = 0; i < 3; ++i) scan(station, 0.0F);
   ASSERT_EQ(h.tracker.active_count(), 1U);
-  // The beam stays broken (the next fillet is right behind): finish the stroke.
   scan(station, h.config.takt.pull_distance_mm);
-  scan(station, 0.0F);
+  // The pulled fillet leaves the beam, then the next row arrives at once.
+  h.in.takt_beam_broken = false;
+  for (int i = 0; i < 3; ++i) scan(station, 1.0F);
+  h.in.takt_beam_broken = true;
+  for (int i = 0; i < 3; ++i) scan(station, 0.0F);
   EXPECT_EQ(station.phase(), TaktStation::Phase::kWaitGap);
   EXPECT_EQ(h.out.drives[index(DriveId::kTakt)].speed_mps, 0.0F);  // holds the row
   EXPECT_EQ(h.tracker.active_count(), 1U);
@@ -110,6 +114,37 @@ TEST_F(TaktTest, NextRowWaitsUntilThePreviousItemIsClear) {
   const int period_scans = static_cast<int>(h.config.takt.min_period_s / 0.01F) + 1;
   for (int i = 0; i < period_scans; ++i) scan(station, 0.0F);
   EXPECT_EQ(h.tracker.active_count(), 2U);
+}
+
+// The pulled fillet's tail keeps the beam broken after the stroke: that is the same
+// fillet, not the next row, however long it lasts.
+TEST_F(TaktTest, BeamThatNeverClearsCountsOnce) {
+  TaktStation station(h.config);
+  h.tracker.advance(h.in);
+  h.in.takt_beam_broken = true;
+  for (int i = 0; i < 500; ++i) {  // 5 s, several minimum periods
+    scan(station, 1.0F);
+    if (!h.tracker.items()[0].active) continue;
+    h.tracker.items()[0].s_mm = h.config.takt.min_gap_mm + 1.0F;  // gap is never the limit
+  }
+  EXPECT_EQ(h.tracker.active_count(), 1U);
+}
+
+// A stop during a stroke lets the stroke finish: the item it created must leave the takt.
+TEST_F(TaktTest, StrokeInProgressFinishesWhenTheInfeedStops) {
+  TaktStation station(h.config);
+  h.tracker.advance(h.in);
+  h.in.takt_beam_broken = true;
+  for (int i = 0; i < 3; ++i) scan(station, 0.0F);
+  ASSERT_EQ(station.phase(), TaktStation::Phase::kPull);
+  test::move_belt(h.in, h.config, DriveId::kTakt, 10.0F);
+  h.tracker.advance(h.in);
+  station.update(h.context(0.01F, true, false), h.out);
+  EXPECT_FLOAT_EQ(h.out.drives[index(DriveId::kTakt)].speed_mps, h.config.takt.takt_speed_mps);
+  test::move_belt(h.in, h.config, DriveId::kTakt, h.config.takt.pull_distance_mm);
+  h.tracker.advance(h.in);
+  station.update(h.context(0.01F, true, false), h.out);
+  EXPECT_EQ(h.out.drives[index(DriveId::kTakt)].speed_mps, 0.0F);
 }
 
 TEST_F(TaktTest, NoFeedingWhileTheInfeedIsDisabled) {

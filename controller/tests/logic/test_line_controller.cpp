@@ -89,6 +89,24 @@ TEST_F(LineControllerTest, LevellerOverloadStopsOnlyTheInfeed) {
   EXPECT_GT(out.drives[index(DriveId::kGuide)].speed_mps, 0.0F);  // downstream drains
 }
 
+// Three consecutive scans whose time steps show skipped periods (the runtime's overruns)
+// fault the line; isolated ones are only counted.
+TEST_F(LineControllerTest, ConsecutiveOverrunsFaultTheLine) {
+  controller.request_start();
+  scans(3);
+  in.time_ns += 20'000'000;  // one skipped period
+  controller.update(in, out);
+  scans(1);
+  EXPECT_EQ(controller.counters().overruns, 1U);
+  EXPECT_EQ(controller.state(), LineState::kRunning);
+  for (int i = 0; i < config.watchdog.overrun_fault_cycles; ++i) {
+    in.time_ns += 30'000'000;
+    controller.update(in, out);
+  }
+  EXPECT_EQ(controller.state(), LineState::kFault);
+  EXPECT_NE(controller.active_faults() & fault_bit(FaultCode::kCycleOverrun), 0U);
+}
+
 TEST_F(LineControllerTest, SilentCameraIsAFault) {
   controller.request_start();
   // No frame at all for a second of running: longer than any camera's silence limit.

@@ -28,7 +28,7 @@ TEST(Squeeze, RollerStaysUpUntilTheThickestSectionHasPassed) {
   Item& item = item_at(h, roller, 0.0F);  // centre under the roller, thickest still before it
   station.update(h.context(), h.out);
   EXPECT_FALSE(h.out.squeeze_roller_down);
-  item.s_mm = roller + 0.2F * item.length_mm + 10.0F;  // thickest 10 mm past, rear still before
+  item.s_mm = roller + 0.2F * item.length_mm + 20.0F;  // thickest 20 mm past, rear still before
   station.update(h.context(), h.out);
   EXPECT_TRUE(h.out.squeeze_roller_down);
   item.s_mm = roller + 0.5F * item.length_mm + 10.0F;  // whole fillet past: lift
@@ -40,7 +40,7 @@ TEST(Squeeze, ApproachingThickSectionOverridesAnItemBehindWhichItCouldPress) {
   test::Harness h;
   SqueezeStation station(h.config);
   const float roller = h.config.squeeze.roller_s_mm;
-  Item& first = item_at(h, roller + 0.2F * 170.0F + 10.0F, 0.0F);  // would want it down
+  Item& first = item_at(h, roller + 0.2F * 170.0F + 20.0F, 0.0F);  // would want it down
   Item& second = item_at(h, roller + 0.2F * 170.0F - 2.0F, 0.0F);  // thickest just arriving
   (void)first;
   (void)second;
@@ -69,8 +69,9 @@ class FinalTest : public ::testing::Test {
 };
 
 TEST_F(FinalTest, InToleranceIsPlacedAtTheEnd) {
-  Item& item = seen_item(h.config.tolerance.target_angle_rad + 0.5F * h.config.tolerance.angle_tol_rad,
-                         5.0F, h.config.flip.target_side);
+  Item& item =
+      seen_item(h.config.tolerance.target_angle_rad + 0.5F * h.config.tolerance.angle_tol_rad, 5.0F,
+                h.config.flip.target_side);
   station.update(h.context(), h.out);
   EXPECT_FALSE(item.final_reject);
   pass_to(item, h.config.tolerance.final_reject_s_mm);
@@ -80,8 +81,9 @@ TEST_F(FinalTest, InToleranceIsPlacedAtTheEnd) {
 }
 
 TEST_F(FinalTest, AngleOutOfToleranceIsBlownOff) {
-  Item& item = seen_item(h.config.tolerance.target_angle_rad + 2.0F * h.config.tolerance.angle_tol_rad,
-                         0.0F, h.config.flip.target_side);
+  Item& item =
+      seen_item(h.config.tolerance.target_angle_rad + 2.0F * h.config.tolerance.angle_tol_rad, 0.0F,
+                h.config.flip.target_side);
   station.update(h.context(), h.out);
   EXPECT_TRUE(item.final_reject);
   pass_to(item, h.config.tolerance.final_reject_s_mm);
@@ -125,7 +127,8 @@ TEST(Reject, FlaggedItemIsReversedIntoTheCrateAndClosedWithItsReason) {
   bool hold = false;
   station.update(h.context(), h.out, hold);
   EXPECT_TRUE(station.reversing());
-  EXPECT_FLOAT_EQ(h.out.drives[index(DriveId::kReject)].speed_mps, -h.config.reject.reverse_speed_mps);
+  EXPECT_FLOAT_EQ(h.out.drives[index(DriveId::kReject)].speed_mps,
+                  -h.config.reject.reverse_speed_mps);
   // Run the belt back 10 mm a scan until the item is closed; it must have travelled past
   // the belt's upstream edge plus half its length plus the drop margin.
   int scans = 0;
@@ -136,7 +139,8 @@ TEST(Reject, FlaggedItemIsReversedIntoTheCrateAndClosedWithItsReason) {
     ++scans;
   }
   const float expected_travel = 100.0F + 0.5F * 170.0F + h.config.reject.drop_margin_mm;
-  EXPECT_NEAR(10.0F * static_cast<float>(scans), expected_travel, 10.0F);  // one scan's travel of resolution
+  EXPECT_NEAR(10.0F * static_cast<float>(scans), expected_travel,
+              10.0F);  // one scan's travel of resolution
   EXPECT_EQ(h.records.pop()->outcome, Outcome::kRejectedNotSingulated);
   station.update(h.context(), h.out, hold);
   EXPECT_FALSE(station.reversing());

@@ -143,7 +143,8 @@ TEST_F(TrackerTest, FloodedFrameIsClampedAndFlagged) {
 }
 
 TEST_F(TrackerTest, FullTableCountsOverflowInsteadOfCrashing) {
-  for (std::size_t i = 0; i < kMaxTrackedItems; ++i) ASSERT_NE(h.tracker.create(0, 0.0F, false), nullptr);
+  for (std::size_t i = 0; i < kMaxTrackedItems; ++i)
+    ASSERT_NE(h.tracker.create(0, 0.0F, false), nullptr);
   EXPECT_EQ(h.tracker.create(0, 0.0F, false), nullptr);
   EXPECT_EQ(h.tracker.overflows(), 1U);
 }

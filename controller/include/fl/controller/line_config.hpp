@@ -53,12 +53,12 @@ struct LevellerConfig {
 };
 
 struct TaktConfig {
-  float standard_speed_mps = 0.08F;
+  float standard_speed_mps = 0.12F;
   float takt_speed_mps = 0.6F;
   float takt_accel_mps2 = 6.0F;
-  float pull_distance_mm = 180.0F;  // belt travel of one takt stroke
-  float min_period_s = 0.85F;       // caps the rate: 60 / 0.85 = about 70 per minute
-  float min_gap_mm = 350.0F;  // previous item must be this far past the barrier first
+  float pull_distance_mm = 110.0F;  // belt travel of one stroke: the front row's centre across
+  float min_period_s = 0.9F;        // caps the rate: 60 / 0.9 = about 67 per minute
+  float min_gap_mm = 200.0F;  // previous item must be this far past the barrier first
   float beam_debounce_s = 0.02F;
 };
 
@@ -84,7 +84,7 @@ struct CentringConfig {
 };
 
 struct MultilaneConfig {
-  float common_speed_mps = 0.4F;
+  float common_speed_mps = 0.6F;  // faster than the centring belt: stretches the spacing
   float max_differential_mps = 0.5F;  // |right - left|, within both drives' limits
   float belt_track_mm = 80.0F;        // effective lateral lever between the two belts
   float angle_gain_per_s = 12.0F;      // proportional gain of the angle loop

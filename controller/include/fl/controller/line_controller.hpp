@@ -33,6 +33,7 @@ inline constexpr std::uint32_t fault_bit(FaultCode code) {
 // Counters a commissioning engineer reads to see how the line is doing; monotonic per run.
 struct ControllerCounters {
   std::uint64_t scans = 0;
+  std::uint64_t overruns = 0;  // scans whose time step was longer than 1.5 periods
   std::uint64_t items_created = 0;  // by the takt
   std::uint64_t items_adopted = 0;  // from detections no tracked item explained
   std::uint64_t items_closed = 0;
@@ -89,6 +90,9 @@ class LineController {
   // Closed ledger records and events, drained by a non-real-time consumer.
   RecordRing& closed_records();
   EventRing& events();
+  // Entries lost because the consumer fell behind: a balanced ledger needs zero records lost.
+  [[nodiscard]] std::uint64_t records_dropped() const;
+  [[nodiscard]] std::uint64_t events_dropped() const;
 
   // Close every item still in transit as lost with the given reason (end of a run, or the
   // operator clearing the belts after a fault), so the ledger balances.

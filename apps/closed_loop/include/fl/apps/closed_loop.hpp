@@ -5,9 +5,8 @@
 #include <array>
 #include <cstdint>
 #include <functional>
-#include <string>
-
 #include <nlohmann/json_fwd.hpp>
+#include <string>
 
 #include "fl/controller/cycle_stats.hpp"
 #include "fl/controller/ledger.hpp"
@@ -18,11 +17,11 @@
 namespace fl::apps {
 
 struct RunOptions {
-  double duration_s = 60.0;     // feeding time; the line is drained afterwards
+  double duration_s = 60.0;  // feeding time; the line is drained afterwards
   std::uint64_t seed = 1;
   std::int64_t period_ns = 10'000'000;  // the scan period, 10 ms as on the line PC
-  double drain_timeout_s = 30.0;         // a controlled stop empties the belts within this
-  bool measure_compute = true;           // time each update() (the logic only)
+  double drain_timeout_s = 30.0;        // a controlled stop empties the belts within this
+  bool measure_compute = true;          // time each update() (the logic only)
   // Called about once per simulated second with (simulated s, total s); may be empty.
   std::function<void(double, double)> progress;
   // Called for each controller event outside the scan (logging); may be empty.
@@ -33,7 +32,7 @@ struct RunOptions {
 
 // Ground truth tally from the plant: what physically happened to every fillet.
 struct TruthTally {
-  std::uint64_t fed = 0;       // crossed the takt barrier
+  std::uint64_t fed = 0;  // crossed the takt barrier
   std::uint64_t on_line_at_end = 0;
   std::uint64_t exits = 0;
   std::uint64_t outfeed = 0;
@@ -55,9 +54,9 @@ struct Kpis {
   double realtime_factor = 0.0;
 
   TruthTally truth;
-  double placed_per_minute = 0.0;      // fillets placed at the outfeed per minute of feeding
-  double items_per_minute = 0.0;       // takt strokes (items) per minute of feeding
-  double in_spec_share = 0.0;          // outfeed_in_spec / singulated fillets that exited
+  double placed_per_minute = 0.0;  // fillets placed at the outfeed per minute of feeding
+  double items_per_minute = 0.0;   // takt strokes (items) per minute of feeding
+  double in_spec_share = 0.0;      // outfeed_in_spec / singulated fillets that exited
 
   // Controller ledger.
   std::uint64_t items_created = 0;
@@ -68,13 +67,31 @@ struct Kpis {
   ControllerCounters counters;
   std::uint32_t faults_seen = 0;  // every fault bit raised during the run
 
-  DistributionSummary compute;  // update() time per scan
+  DistributionSummary compute;   // update() time per scan
   bool ledger_balanced = false;  // created == closed, nothing in transit
   bool truth_balanced = false;   // fed == exits + on line
 };
 
 // Runs the loop. The plant is reset with the seed; the controller is reset and started.
 Kpis run_closed_loop(const LineConfig& config, Plant& plant, const RunOptions& options);
+
+// Collects what a run produces (truth exits, ledger records, events) and turns it into KPIs;
+// shared by the lock-step loop and the real-time run so that both report the same way.
+class KpiCollector {
+ public:
+  explicit KpiCollector(const LineConfig& config) : config_(config) {}
+  void add_exit(const TrueFilletExit& exit);
+  void add_event(const Event& event);
+  // Completes the KPIs from the controller's counters and the plant's balance.
+  void finish(const LineController& controller, std::uint64_t fed, std::uint64_t on_line,
+              double fed_duration_s, double simulated_s, double wall_s, Kpis& kpis) const;
+  [[nodiscard]] const TruthTally& truth() const { return truth_; }
+
+ private:
+  const LineConfig& config_;
+  TruthTally truth_;
+  std::uint32_t faults_seen_ = 0;
+};
 
 nlohmann::json to_json(const Kpis& kpis);
 // A few lines for a terminal.
