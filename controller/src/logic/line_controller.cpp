@@ -20,10 +20,9 @@ constexpr float kStopDrainTimeoutS = 30.0F;
 // frame (and never sooner than its max age).
 constexpr float kSilentPeriods = 5.0F;
 // Faults that stop the whole line; the others degrade it (their reactions reject items).
-constexpr std::uint32_t kLineStoppingFaults = fault_bit(FaultCode::kEstop) |
-                                              fault_bit(FaultCode::kDriveFault) |
-                                              fault_bit(FaultCode::kTrackerOverflow) |
-                                              fault_bit(FaultCode::kCycleOverrun);
+constexpr std::uint32_t kLineStoppingFaults =
+    fault_bit(FaultCode::kEstop) | fault_bit(FaultCode::kDriveFault) |
+    fault_bit(FaultCode::kTrackerOverflow) | fault_bit(FaultCode::kCycleOverrun);
 }  // namespace
 
 struct LineController::Impl {

@@ -31,7 +31,8 @@ void SqueezeStation::update(const ScanContext& ctx, OutputImage& out) {
     const float thickest_mm = thickest_section_s_mm(item, squeeze.thickest_from_rear);
     // Lowering waits until the thickest section is past now: the roller then touches down
     // behind it whatever its travel time, and presses the rest flat.
-    if (thickest_mm >= squeeze.roller_s_mm + kClearanceMm && rear_s_mm(item) < squeeze.roller_s_mm) {
+    if (thickest_mm >= squeeze.roller_s_mm + kClearanceMm &&
+        rear_s_mm(item) < squeeze.roller_s_mm) {
       down = true;
     }
     // A thickest section that will be under the roller before a lift completes overrides:

@@ -231,8 +231,7 @@ TEST(LineConfigFile, AnglesAreConvertedFromDegrees) {
 // ---------------------------------------------------------------- malformed files
 
 TEST(LineConfigErrors, TypoIsUnknownKeyAndTheRealKeyIsMissing) {
-  const std::string text =
-      replaced(reference_text(), "  min_period_s: 0.9", "  min_perod_s: 0.9");
+  const std::string text = replaced(reference_text(), "  min_period_s: 0.9", "  min_perod_s: 0.9");
   const ConfigError error = parse_error(text);
   const std::string message = error.what();
   const int line = line_of(text, "min_perod_s");
@@ -409,7 +408,7 @@ TEST(LineConfigErrors, BadEnumValue) {
 
 TEST(LineConfigErrors, MultipleProblemsAreAllReported) {
   std::string text = reference_text();
-  text = replaced(text, "  min_period_s: 0.9", "  min_perod_s: 0.9");            // 2 problems
+  text = replaced(text, "  min_period_s: 0.9", "  min_perod_s: 0.9");              // 2 problems
   text = replaced(text, "  reverse_speed_mps: 0.5", "  reverse_speed_mps: -0.5");  // 1
   text = replaced(text, "  target_side: bone", "  target_side: bones");            // 1
   text = replaced(text, "  lateral_tol_mm: 20.0\n", "");                           // 1

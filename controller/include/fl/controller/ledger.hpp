@@ -30,11 +30,11 @@ inline constexpr std::size_t kOutcomeCount = static_cast<std::size_t>(Outcome::k
 
 enum class LostReason : std::uint8_t {
   kNone,
-  kNotSeenByCamera,   // passed a camera's field of view without a matching detection
-  kStaleEstimates,    // the camera stopped delivering while the item was in view
-  kTrackerOverflow,   // more items on the line than the tracker holds
-  kLineStopped,       // on the belts when the line was faulted and cleared by hand
-  kRunEnded,          // still on the belts when a simulated run ended
+  kNotSeenByCamera,  // passed a camera's field of view without a matching detection
+  kStaleEstimates,   // the camera stopped delivering while the item was in view
+  kTrackerOverflow,  // more items on the line than the tracker holds
+  kLineStopped,      // on the belts when the line was faulted and cleared by hand
+  kRunEnded,         // still on the belts when a simulated run ended
 };
 
 const char* to_string(Outcome outcome);
@@ -62,16 +62,16 @@ struct FilletRecord {
 enum class EventCode : std::uint8_t {
   kItemCreated,
   kItemClosed,
-  kEstimateNotFinite,     // NaN or infinite field in an estimate
-  kEstimateOutOfRange,    // position outside the field of view, confidence outside 0..1
-  kEstimateStale,         // frame older than the camera's max age
-  kFrameOutOfOrder,       // frame time earlier than the previous frame of that camera
-  kDetectionUnmatched,    // no tracked item near the detection
-  kDuplicateDetection,    // two detections in one frame claim the same item
-  kFlipConflict,          // the plates could not be set in time for an item
-  kCameraSilent,          // no new frame for longer than the camera's max age
-  kEstimateFlood,         // a frame claims more detections than it can hold
-  kItemAdopted,           // an unmatched detection became a tracked item (to reject it)
+  kEstimateNotFinite,   // NaN or infinite field in an estimate
+  kEstimateOutOfRange,  // position outside the field of view, confidence outside 0..1
+  kEstimateStale,       // frame older than the camera's max age
+  kFrameOutOfOrder,     // frame time earlier than the previous frame of that camera
+  kDetectionUnmatched,  // no tracked item near the detection
+  kDuplicateDetection,  // two detections in one frame claim the same item
+  kFlipConflict,        // the plates could not be set in time for an item
+  kCameraSilent,        // no new frame for longer than the camera's max age
+  kEstimateFlood,       // a frame claims more detections than it can hold
+  kItemAdopted,         // an unmatched detection became a tracked item (to reject it)
   kRejectReversal,
   kFaultRaised,
   kFaultCleared,

@@ -28,10 +28,10 @@ struct BeltSection {
 };
 
 struct CameraMount {
-  float s_mm = 0.0F;             // line position of the optical axis
+  float s_mm = 0.0F;              // line position of the optical axis
   float field_of_view_mm = 0.0F;  // length of belt seen along travel
-  float period_s = 0.04F;        // nominal frame period, for staleness checks
-  float max_age_s = 0.1F;        // an estimate older than this is stale
+  float period_s = 0.04F;         // nominal frame period, for staleness checks
+  float max_age_s = 0.1F;         // an estimate older than this is stale
 };
 
 struct BulkConfig {
@@ -40,7 +40,7 @@ struct BulkConfig {
   float level_ki_mps_per_mm_s = 0.002F;
   float min_speed_mps = 0.0F;
   float max_speed_mps = 0.15F;
-  float hopper_opening_mm = 60.0F;        // thesis 6.1: about two fillets high flows stably
+  float hopper_opening_mm = 60.0F;          // thesis 6.1: about two fillets high flows stably
   float hopper_unblock_opening_mm = 90.0F;  // opened to this when starved
   float starved_after_s = 6.0F;  // level under half setpoint at full bulk speed this long
   float unblock_duration_s = 2.0F;
@@ -58,14 +58,14 @@ struct TaktConfig {
   float takt_accel_mps2 = 6.0F;
   float pull_distance_mm = 110.0F;  // belt travel of one stroke: the front row's centre across
   float min_period_s = 0.9F;        // caps the rate: 60 / 0.9 = about 67 per minute
-  float min_gap_mm = 200.0F;  // previous item must be this far past the barrier first
+  float min_gap_mm = 200.0F;        // previous item must be this far past the barrier first
   float beam_debounce_s = 0.02F;
 };
 
 struct FlipConfig {
-  float plate1_s_mm = 0.0F;  // end-over-end plate
-  float plate2_s_mm = 0.0F;  // sideways plate
-  float actuation_s = 0.15F;  // plate travel time
+  float plate1_s_mm = 0.0F;     // end-over-end plate
+  float plate2_s_mm = 0.0F;     // sideways plate
+  float actuation_s = 0.15F;    // plate travel time
   float clearance_mm = 100.0F;  // the plate is committed while an item is this close
   SideUp target_side = SideUp::kBone;
 };
@@ -84,11 +84,11 @@ struct CentringConfig {
 };
 
 struct MultilaneConfig {
-  float common_speed_mps = 0.6F;  // faster than the centring belt: stretches the spacing
+  float common_speed_mps = 0.6F;      // faster than the centring belt: stretches the spacing
   float max_differential_mps = 0.5F;  // |right - left|, within both drives' limits
   float belt_track_mm = 80.0F;        // effective lateral lever between the two belts
-  float angle_gain_per_s = 12.0F;      // proportional gain of the angle loop
-  float angle_done_rad = 0.02F;        // settled when within this
+  float angle_gain_per_s = 12.0F;     // proportional gain of the angle loop
+  float angle_done_rad = 0.02F;       // settled when within this
 };
 
 struct SqueezeConfig {
@@ -99,17 +99,17 @@ struct SqueezeConfig {
 
 struct ToleranceConfig {
   float target_angle_rad = 0.6108652F;  // 35 degrees, the placement of thesis figure 1.3a
-  bool mirror_for_left = true;           // left fillets placed at -target
-  float angle_tol_rad = 0.0872665F;      // 5 degrees
+  bool mirror_for_left = true;          // left fillets placed at -target
+  float angle_tol_rad = 0.0872665F;     // 5 degrees
   float lateral_tol_mm = 20.0F;
-  float final_reject_s_mm = 0.0F;        // air knife position
+  float final_reject_s_mm = 0.0F;  // air knife position
   float final_reject_pulse_s = 0.1F;
 };
 
 struct TrackingConfig {
   float match_gate_mm = 80.0F;       // a detection matches a fillet predicted within this
   float nominal_length_mm = 170.0F;  // used before camera 1 measures an item
-  float lost_after_mm = 400.0F;  // expected at a camera but unseen for this much travel
+  float lost_after_mm = 400.0F;      // expected at a camera but unseen for this much travel
 };
 
 struct WatchdogConfig {

@@ -21,7 +21,7 @@ enum class FaultCode : std::uint8_t {
   kLevellerOverload,
   kCycleOverrun,
   kCameraSilent,
-  kEstimateFlood,    // more detections than a frame can hold, or a burst of bad estimates
+  kEstimateFlood,  // more detections than a frame can hold, or a burst of bad estimates
   kTrackerOverflow,
   kCount
 };
@@ -33,7 +33,7 @@ inline constexpr std::uint32_t fault_bit(FaultCode code) {
 // Counters a commissioning engineer reads to see how the line is doing; monotonic per run.
 struct ControllerCounters {
   std::uint64_t scans = 0;
-  std::uint64_t overruns = 0;  // scans whose time step was longer than 1.5 periods
+  std::uint64_t overruns = 0;       // scans whose time step was longer than 1.5 periods
   std::uint64_t items_created = 0;  // by the takt
   std::uint64_t items_adopted = 0;  // from detections no tracked item explained
   std::uint64_t items_closed = 0;

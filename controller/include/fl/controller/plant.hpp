@@ -14,15 +14,15 @@ namespace fl {
 // Where a fillet physically ended, according to the plant's ground truth. The controller
 // never sees this; KPIs compare it with the controller's own ledger.
 enum class TrueExit : std::uint8_t {
-  kOutfeed,       // handed over past the end of the outfeed
-  kRejectCrate,   // dropped by a reject-belt reversal
-  kFinalReject,   // blown off by the final air knife
-  kFellOff,       // left the belt sideways or got stuck (a plant-side loss)
+  kOutfeed,      // handed over past the end of the outfeed
+  kRejectCrate,  // dropped by a reject-belt reversal
+  kFinalReject,  // blown off by the final air knife
+  kFellOff,      // left the belt sideways or got stuck (a plant-side loss)
 };
 
 struct TrueFilletExit {
-  std::uint32_t plant_id = 0;      // the plant's own fillet number
-  std::uint32_t group_id = 0;      // fillets touching each other share a group id
+  std::uint32_t plant_id = 0;  // the plant's own fillet number
+  std::uint32_t group_id = 0;  // fillets touching each other share a group id
   std::int64_t time_ns = 0;
   TrueExit exit = TrueExit::kOutfeed;
   Hand hand = Hand::kUnknown;

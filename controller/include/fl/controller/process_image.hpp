@@ -15,19 +15,19 @@ namespace fl {
 
 // Every motor-driven conveyor of the line (thesis section 5.3, figure 5.16), in flow order.
 enum class DriveId : std::uint8_t {
-  kBulk,             // belt under the mailbox hopper, speed regulated from the level sensor
-  kTakt,             // takt conveyor: standard speed, accelerates to pull a row out
-  kTransition1,      // speed transitions that pull the line apart
+  kBulk,         // belt under the mailbox hopper, speed regulated from the level sensor
+  kTakt,         // takt conveyor: standard speed, accelerates to pull a row out
+  kTransition1,  // speed transitions that pull the line apart
   kTransition2,
-  kGuide,            // inclined belt with guiding rails, camera 1 at its end
-  kReject,           // belt after the flip plates; reverses to drop a fillet into the crate
-  kCentring,         // belt under camera 2 and the centring unit
-  kMultilane1Left,   // orienting unit 1: two side-by-side belts
+  kGuide,           // inclined belt with guiding rails, camera 1 at its end
+  kReject,          // belt after the flip plates; reverses to drop a fillet into the crate
+  kCentring,        // belt under camera 2 and the centring unit
+  kMultilane1Left,  // orienting unit 1: two side-by-side belts
   kMultilane1Right,
-  kMultilane2Left,   // orienting unit 2
+  kMultilane2Left,  // orienting unit 2
   kMultilane2Right,
-  kSqueeze,          // belt under the squeeze roller and the final camera
-  kOutfeed,          // hands placed fillets to the portion cutter
+  kSqueeze,  // belt under the squeeze roller and the final camera
+  kOutfeed,  // hands placed fillets to the portion cutter
   kCount
 };
 inline constexpr std::size_t kDriveCount = static_cast<std::size_t>(DriveId::kCount);
@@ -37,7 +37,7 @@ enum class CameraId : std::uint8_t {
   kPosition,     // camera 2, before the centring unit: lateral position
   kMultilane1,   // angle feedback on orienting unit 1 (about every 25 ms)
   kMultilane2,
-  kFinal,        // final inspection after the squeeze roller
+  kFinal,  // final inspection after the squeeze roller
   kCount
 };
 inline constexpr std::size_t kCameraCount = static_cast<std::size_t>(CameraId::kCount);
@@ -78,10 +78,10 @@ struct CameraFrame {
 };
 
 struct DriveFeedback {
-  float speed_mps = 0.0F;            // measured belt surface speed
-  std::int64_t encoder_counts = 0;   // monotonic within a run; sign follows direction
-  bool ready = false;                // drive enabled and following its command
-  bool fault = false;                // drive reports a fault (CiA 402 fault state)
+  float speed_mps = 0.0F;           // measured belt surface speed
+  std::int64_t encoder_counts = 0;  // monotonic within a run; sign follows direction
+  bool ready = false;               // drive enabled and following its command
+  bool fault = false;               // drive reports a fault (CiA 402 fault state)
 };
 
 struct InputImage {
@@ -89,11 +89,11 @@ struct InputImage {
   std::array<DriveFeedback, kDriveCount> drives{};
   std::array<CameraFrame, kCameraCount> cameras{};
 
-  bool takt_beam_broken = false;    // laser barrier at the end of the takt conveyor
-  float level_mm = 0.0F;            // layer height measured in front of the leveller
-  float hopper_opening_mm = 0.0F;   // cylinder position at the mailbox opening
+  bool takt_beam_broken = false;   // laser barrier at the end of the takt conveyor
+  float level_mm = 0.0F;           // layer height measured in front of the leveller
+  float hopper_opening_mm = 0.0F;  // cylinder position at the mailbox opening
   float leveller_speed_rpm = 0.0F;
-  bool leveller_overload = false;   // blade jam or motor overload
+  bool leveller_overload = false;     // blade jam or motor overload
   bool flip_plate1_flipping = false;  // end switches: true = plate retracted (fillet flips)
   bool flip_plate2_flipping = false;
   float centring_position_mm = 0.0F;  // lateral position of the centring pusher
