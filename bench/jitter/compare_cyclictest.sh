@@ -13,7 +13,7 @@ set -euo pipefail
 duration_s=60
 period_us=10000
 cpu=""
-fl_jitter="build/h-runtime/bench/jitter/fl_jitter"
+fl_jitter="build/release/bench/jitter/fl_jitter"
 output=""
 while getopts "d:i:a:b:o:h" option; do
   case "${option}" in

@@ -122,6 +122,7 @@ Kpis run_closed_loop(const LineConfig& config, Plant& plant, const RunOptions& o
       controller.request_stop();
       stop_sent = true;
     }
+    if (options.before_scan) options.before_scan(in.time_ns, controller);
     if (options.measure_compute) {
       const auto start = std::chrono::steady_clock::now();
       controller.update(in, out);

@@ -57,6 +57,7 @@ Tracker::Tracker(const LineConfig& config) : config_(config) { reset(); }
 
 void Tracker::reset() {
   for (Item& item : items_) item = Item{};
+  for (auto& camera : tentatives_) camera.fill(Tentative{});
   last_counts_.fill(0);
   travel_mm_.fill(0.0F);
   last_sequence_.fill(0);
@@ -95,6 +96,39 @@ void Tracker::advance(const InputImage& in) {
   for (Item& item : items_) {
     if (item.active && !item.dropping) item.s_mm += travel_at_mm(item.s_mm);
   }
+  for (auto& camera : tentatives_) {
+    for (Tentative& tentative : camera) {
+      if (tentative.active) tentative.s_mm += travel_at_mm(tentative.s_mm);
+    }
+  }
+}
+
+bool Tracker::confirm_unmatched(CameraId camera, float s_mm, std::int64_t time_ns) {
+  auto& tentatives = tentatives_[index(camera)];
+  // A tentative not seen for this many frame periods was a phantom.
+  constexpr float kExpiryPeriods = 3.0F;
+  const auto expiry_ns =
+      static_cast<std::int64_t>(kExpiryPeriods * config_.cameras[index(camera)].period_s * 1e9F);
+  Tentative* match = nullptr;
+  Tentative* free_slot = nullptr;
+  for (Tentative& tentative : tentatives) {
+    if (tentative.active && time_ns - tentative.last_seen_ns > expiry_ns) tentative.active = false;
+    if (!tentative.active) {
+      if (free_slot == nullptr) free_slot = &tentative;
+      continue;
+    }
+    if (std::fabs(tentative.s_mm - s_mm) <= config_.tracking.match_gate_mm) match = &tentative;
+  }
+  if (match == nullptr) {
+    if (free_slot == nullptr) return false;  // flooded with phantoms: counted, not adopted
+    *free_slot = Tentative{true, s_mm, 1, time_ns};
+    return kConfirmFrames <= 1;
+  }
+  match->s_mm = s_mm;
+  match->last_seen_ns = time_ns;
+  if (++match->hits < kConfirmFrames) return false;
+  match->active = false;
+  return true;
 }
 
 float Tracker::travel_at_mm(float s_mm) const {
@@ -226,7 +260,7 @@ FrameIntake Tracker::ingest(const InputImage& in, CameraId camera, EventRing& ev
       emit(events, in.time_ns, EventCode::kDetectionUnmatched, 0, source, estimate.x_mm);
       const bool must_adopt = camera == CameraId::kOrientation || camera == CameraId::kPosition ||
                               camera == CameraId::kFinal;
-      if (!must_adopt) continue;
+      if (!must_adopt || !confirm_unmatched(camera, s_now, in.time_ns)) continue;
       item = create(in.time_ns, s_now, true);
       if (item == nullptr) continue;
       ++adopted_;

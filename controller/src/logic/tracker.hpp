@@ -91,8 +91,22 @@ struct FrameIntake {
   bool flooded = false;
 };
 
+// An unmatched detection waiting for confirmation: a fillet the tracker missed shows up
+// frame after frame where the belt carries it, a phantom (glare, a scrap) does not.
+struct Tentative {
+  bool active = false;
+  float s_mm = 0.0F;
+  std::uint8_t hits = 0;
+  std::int64_t last_seen_ns = 0;
+};
+
 class Tracker {
  public:
+  // Frames in which an unmatched detection must reappear before it becomes an item.
+  static constexpr std::uint8_t kConfirmFrames = 3;
+  // Tentatives per camera: more unexplained blobs than this at once is a flood.
+  static constexpr std::size_t kMaxTentatives = 8;
+
   explicit Tracker(const LineConfig& config);
   void reset();
 
@@ -143,9 +157,12 @@ class Tracker {
 
  private:
   Item* nearest_item(float s_mm, float gate_mm);
+  // Counts an unmatched detection; returns true once it is confirmed.
+  bool confirm_unmatched(CameraId camera, float s_mm, std::int64_t time_ns);
 
   const LineConfig& config_;
   std::array<Item, kMaxTrackedItems> items_{};
+  std::array<std::array<Tentative, kMaxTentatives>, kCameraCount> tentatives_{};
   std::array<std::int64_t, kDriveCount> last_counts_{};
   std::array<float, kDriveCount> travel_mm_{};
   std::array<std::uint32_t, kCameraCount> last_sequence_{};

@@ -98,17 +98,36 @@ TEST_F(TrackerTest, OutOfOrderFrameIsRefused) {
   EXPECT_EQ(h.tracker.ingest(h.in, CameraId::kPosition, h.events).rejected, 1);
 }
 
-TEST_F(TrackerTest, UnmatchedDetectionAtCameraOneIsAdoptedForRejection) {
+TEST_F(TrackerTest, RepeatedUnmatchedDetectionAtCameraOneIsAdoptedForRejection) {
   const float camera_s = h.config.cameras[index(CameraId::kOrientation)].s_mm;
-  test::publish(h.in, h.config, CameraId::kOrientation, camera_s,
-                test::good_estimate(Hand::kLeft, SideUp::kBone, 0.0F));
-  const FrameIntake intake = h.tracker.ingest(h.in, CameraId::kOrientation, h.events);
-  EXPECT_EQ(intake.unmatched, 1);
+  for (int frame = 0; frame < Tracker::kConfirmFrames; ++frame) {
+    EXPECT_EQ(h.tracker.active_count(), 0U) << "adopted before confirmation, frame " << frame;
+    h.in.time_ns += 40'000'000;  // the camera's 25 frames per second
+    test::publish(h.in, h.config, CameraId::kOrientation, camera_s,
+                  test::good_estimate(Hand::kLeft, SideUp::kBone, 0.0F));
+    EXPECT_EQ(h.tracker.ingest(h.in, CameraId::kOrientation, h.events).unmatched, 1);
+  }
   ASSERT_EQ(h.tracker.active_count(), 1U);
   const Item& adopted = h.tracker.items()[0];
   EXPECT_TRUE(adopted.adopted);
   EXPECT_TRUE(adopted.reject_pending);
   EXPECT_EQ(adopted.reject_reason, Outcome::kRejectedUntracked);
+}
+
+// Phantoms (glare, a scrap of skin) appear once at random places: never adopted.
+TEST_F(TrackerTest, PhantomDetectionsAreNotAdopted) {
+  const float camera_s = h.config.cameras[index(CameraId::kOrientation)].s_mm;
+  for (int frame = 0; frame < 20; ++frame) {
+    h.in.time_ns += 40'000'000;
+    // Four spots 100 mm apart (farther than the 80 mm match gate); a spot comes back only
+    // after four frames, later than a tentative's three-period expiry.
+    const float s = camera_s - 150.0F + 100.0F * static_cast<float>(frame % 4);
+    test::publish(h.in, h.config, CameraId::kOrientation, s,
+                  test::good_estimate(Hand::kLeft, SideUp::kBone, 0.0F));
+    h.tracker.ingest(h.in, CameraId::kOrientation, h.events);
+  }
+  EXPECT_EQ(h.tracker.active_count(), 0U);
+  EXPECT_EQ(h.tracker.unmatched_detections(), 20U);
 }
 
 TEST_F(TrackerTest, UnmatchedDetectionOnTheMultilaneIsOnlyCounted) {

@@ -28,6 +28,9 @@ struct RunOptions {
   std::function<void(const Event&)> on_event;
   // Called for each closed ledger record; may be empty.
   std::function<void(const FilletRecord&)> on_record;
+  // Called before each scan with the scan's time, for scenarios that inject faults or
+  // operator actions; may be empty.
+  std::function<void(std::int64_t time_ns, LineController& controller)> before_scan;
 };
 
 // Ground truth tally from the plant: what physically happened to every fillet.

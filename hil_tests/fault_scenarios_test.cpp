@@ -1,0 +1,124 @@
+// Closed-loop fault scenarios: bad sensor data and safety events against the fast plant.
+// Whatever happens, no touching pair is placed, nothing is placed unseen, and both the
+// controller's ledger and the plant's ground truth balance.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "fl/apps/closed_loop.hpp"
+#include "fl/controller/config_loader.hpp"
+#include "fl/twin/fast_plant.hpp"
+#include "fl/twin/fast_plant_config.hpp"
+
+namespace fl {
+namespace {
+
+const std::filesystem::path kConfigDir = std::filesystem::path(FL_SOURCE_DIR) / "config";
+constexpr std::int64_t kSecond = 1'000'000'000;
+
+struct Scenario {
+  LineConfig line = load_line_config(kConfigDir / "line.yaml");
+  FastPlant plant{line, load_fast_plant_config(kConfigDir / "plant_fast.yaml")};
+  apps::RunOptions options;
+  Scenario() {
+    options.duration_s = 120.0;
+    options.seed = 11;
+    options.measure_compute = false;
+  }
+  apps::Kpis run() { return apps::run_closed_loop(line, plant, options); }
+};
+
+void expect_books_balance(const apps::Kpis& kpis) {
+  EXPECT_TRUE(kpis.truth_balanced);
+  EXPECT_EQ(kpis.truth.on_line_at_end, 0U);
+  EXPECT_TRUE(kpis.ledger_balanced);
+  EXPECT_EQ(kpis.truth.outfeed_not_singulated, 0U);
+}
+
+// Every camera delivers NaN fields, duplicates, out-of-order frames, phantom detections
+// and dropped frames, a few percent of frames each.
+TEST(FaultScenarios, CorruptCameraDataIsRefusedAndNothingIsPlacedBlind) {
+  Scenario scenario;
+  // Set before each scan: resetting the plant at the start of the run clears faults.
+  scenario.options.before_scan = [&](std::int64_t, LineController&) {
+    for (FastCameraFaults& camera : scenario.plant.faults().cameras) {
+      camera.nan_prob = 0.02F;
+      camera.duplicate_prob = 0.02F;
+      camera.out_of_order_prob = 0.02F;
+      camera.phantom_prob = 0.02F;
+      camera.drop_frame_prob = 0.02F;
+    }
+  };
+  const apps::Kpis kpis = scenario.run();
+  SCOPED_TRACE(apps::format_kpis(kpis));
+  expect_books_balance(kpis);
+  EXPECT_GT(kpis.counters.estimates_rejected, 0U);    // the NaN and out-of-order frames
+  EXPECT_GT(kpis.counters.detections_unmatched, 0U);  // the phantoms
+  // The line keeps producing: the bad data costs rejects, not the shift. Half the
+  // throughput of a clean run (60 per minute) is the floor this must stay above.
+  EXPECT_GT(kpis.placed_per_minute, 30.0);
+  // What was placed is still right: the final camera checks every fillet.
+  EXPECT_GE(
+      static_cast<double>(kpis.truth.outfeed_in_spec) / static_cast<double>(kpis.truth.outfeed),
+      0.97);
+}
+
+// Camera 1 stops delivering for 20 s: items pass unclassified and are rejected, the
+// fault is raised, and production resumes when the camera is back.
+TEST(FaultScenarios, SilentOrientationCameraRejectsWhatItCannotSee) {
+  Scenario scenario;
+  auto& camera = scenario.plant.faults().cameras[index(CameraId::kOrientation)];
+  scenario.options.before_scan = [&](std::int64_t time_ns, LineController&) {
+    camera.stale = time_ns >= 30 * kSecond && time_ns < 50 * kSecond;
+  };
+  const apps::Kpis kpis = scenario.run();
+  SCOPED_TRACE(apps::format_kpis(kpis));
+  expect_books_balance(kpis);
+  EXPECT_NE(kpis.faults_seen & fault_bit(FaultCode::kCameraSilent), 0U);
+  EXPECT_GT(kpis.outcomes[static_cast<std::size_t>(Outcome::kRejectedUnclassified)], 10U);
+  // Nothing unclassified slipped through: what was placed is in spec.
+  EXPECT_GE(
+      static_cast<double>(kpis.truth.outfeed_in_spec) / static_cast<double>(kpis.truth.outfeed),
+      0.97);
+  EXPECT_GT(kpis.placed_per_minute, 40.0);  // 100 s of the 120 s produced
+}
+
+// E-stop at 40 s: drives disabled in the same scan; the operator closes the chain,
+// acknowledges and restarts; the fillets on the belts when it stopped stay tracked.
+TEST(FaultScenarios, EstopStopsTheLineAndItRestartsAfterAcknowledge) {
+  Scenario scenario;
+  bool saw_fault_state = false;
+  scenario.options.before_scan = [&](std::int64_t time_ns, LineController& controller) {
+    scenario.plant.faults().estop_open = time_ns >= 40 * kSecond && time_ns < 45 * kSecond;
+    if (controller.state() == LineState::kFault) saw_fault_state = true;
+    if (time_ns == 46 * kSecond) controller.acknowledge_faults();
+    if (time_ns == 47 * kSecond) controller.request_start();
+  };
+  const apps::Kpis kpis = scenario.run();
+  SCOPED_TRACE(apps::format_kpis(kpis));
+  EXPECT_TRUE(saw_fault_state);
+  EXPECT_NE(kpis.faults_seen & fault_bit(FaultCode::kEstop), 0U);
+  expect_books_balance(kpis);
+  EXPECT_GT(kpis.placed_per_minute, 40.0);  // it did restart
+}
+
+// A drive trips at 60 s: the line faults; it stays down (the drive stays faulted), and
+// the run's drain closes what is left as lost with a reason rather than dropping it.
+TEST(FaultScenarios, DriveTripStopsTheLineAndNothingVanishes) {
+  Scenario scenario;
+  scenario.options.before_scan = [&](std::int64_t time_ns, LineController&) {
+    scenario.plant.faults().drive_fault[index(DriveId::kMultilane2Right)] = time_ns >= 60 * kSecond;
+  };
+  scenario.options.drain_timeout_s = 5.0;
+  const apps::Kpis kpis = scenario.run();
+  SCOPED_TRACE(apps::format_kpis(kpis));
+  EXPECT_NE(kpis.faults_seen & fault_bit(FaultCode::kDriveFault), 0U);
+  EXPECT_TRUE(kpis.truth_balanced);
+  EXPECT_TRUE(kpis.ledger_balanced);
+  EXPECT_GT(kpis.truth.on_line_at_end, 0U);  // the stopped belts still carry fillets
+  EXPECT_GT(kpis.outcomes[static_cast<std::size_t>(Outcome::kLost)], 0U);  // closed as run ended
+  EXPECT_EQ(kpis.truth.outfeed_not_singulated, 0U);
+}
+
+}  // namespace
+}  // namespace fl
