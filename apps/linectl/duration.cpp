@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <charconv>
+#include <cmath>
 
 namespace fl::apps {
 
@@ -12,7 +13,9 @@ std::optional<double> parse_duration_s(std::string_view text) {
   while (pos < text.size()) {
     double value = 0.0;
     const auto [end, error] = std::from_chars(text.data() + pos, text.data() + text.size(), value);
-    if (error != std::errc{} || end == text.data() + pos || value < 0.0) return std::nullopt;
+    if (error != std::errc{} || end == text.data() + pos || !std::isfinite(value) || value < 0.0) {
+      return std::nullopt;
+    }
     pos = static_cast<std::size_t>(end - text.data());
     double unit_s = 1.0;  // a bare number is seconds
     if (pos < text.size()) {
