@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libopencv-dev cyclonedds-dev cyclonedds-tools
   rt-tests python3
+  qemu-system-x86 busybox-static can-utils
 )
 
 missing=()

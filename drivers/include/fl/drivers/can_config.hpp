@@ -1,0 +1,88 @@
+// The CAN bus configuration (config/can.yaml): interface, bitrate, node ids of the drives
+// and I/O modules, PDO COB-IDs, scaling from line units to drive units, heartbeat timeouts
+// and SDO start-up parameters. Loaded with the strict YAML reader: every problem named with
+// file, key and line, unknown keys refused, and cross-checked against the line config (the
+// encoder scaling must agree with line.yaml's counts_per_mm).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+#include "fl/controller/line_config.hpp"
+#include "fl/controller/process_image.hpp"
+#include "fl/drivers/canopen.hpp"
+
+namespace fl::drivers {
+
+struct DriveNodeConfig {
+  canopen::NodeId node_id = 0;
+  std::uint32_t rpdo1_cob_id = 0;  // controlword + target velocity, every cycle
+  std::uint32_t rpdo2_cob_id = 0;  // profile acceleration + deceleration, on change
+  std::uint32_t tpdo1_cob_id = 0;  // statusword + position actual, every SYNC
+  std::uint32_t tpdo2_cob_id = 0;  // velocity actual, every tpdo2_every_syncs SYNCs
+  std::uint8_t tpdo2_every_syncs = 1;
+  // Drive velocity units (0x60FF, 0x606C) per m/s of belt surface speed.
+  double velocity_units_per_mps = 0.0;
+  // Drive acceleration units (0x6083, 0x6084) per m/s^2 at the belt surface.
+  double acceleration_units_per_mps2 = 0.0;
+  // Position actual (0x6064) counts per mm of belt travel: line.yaml's counts_per_mm.
+  double position_counts_per_mm = 0.0;
+  std::uint16_t heartbeat_producer_ms = 0;  // written to the drive's 0x1017
+  std::uint16_t heartbeat_timeout_ms = 0;   // the master's consumer timeout
+  // Copied from line.yaml's drive limits: commands are clamped to them.
+  float max_speed_mps = 0.0F;
+  float max_accel_mps2 = 0.0F;
+};
+
+// The I/O modules (CiA 401) and which signal sits on which channel: see config/can.yaml.
+enum class IoModuleId : std::uint8_t {
+  kInfeed,    // laser barrier, leveller overload; level, hopper, leveller speed; outputs
+  kStations,  // flip plate and squeeze roller switches, centring position; their outputs
+  kSafety,    // E-stop chain and operator buttons; lamps
+  kCount
+};
+inline constexpr std::size_t kIoModuleCount = static_cast<std::size_t>(IoModuleId::kCount);
+inline constexpr std::size_t index(IoModuleId id) { return static_cast<std::size_t>(id); }
+std::string_view config_name(IoModuleId id);
+
+struct IoModuleConfig {
+  canopen::NodeId node_id = 0;
+  std::uint32_t rpdo1_cob_id = 0;
+  std::uint32_t tpdo1_cob_id = 0;
+  std::uint16_t heartbeat_producer_ms = 0;
+  std::uint16_t heartbeat_timeout_ms = 0;
+};
+
+// Analogue channel scaling: engineering unit per count of the 16-bit value.
+struct IoScaling {
+  float level_mm_per_count = 0.0F;
+  float hopper_opening_mm_per_count = 0.0F;
+  float leveller_rpm_per_count = 0.0F;
+  float centring_mm_per_count = 0.0F;
+};
+
+struct CanConfig {
+  std::string interface_name;
+  std::uint32_t bitrate_bps = 0;     // set by the OS (ip link), used here for the bus load check
+  std::int64_t cycle_period_ns = 0;  // SYNC period = the scan period from line.yaml
+  std::uint16_t sdo_timeout_ms = 0;
+  std::uint16_t boot_timeout_ms = 0;    // NMT reset to every boot-up message
+  std::uint16_t enable_timeout_ms = 0;  // CiA 402 enable sequence at start-up
+  float max_bus_load = 0.0F;            // share of the bitrate the cyclic traffic may use
+  std::array<DriveNodeConfig, kDriveCount> drives{};
+  std::array<IoModuleConfig, kIoModuleCount> io_modules{};
+  IoScaling io_scaling;
+};
+
+// Throws fl::ConfigError listing every problem.
+CanConfig load_can_config(const std::filesystem::path& file, const LineConfig& line);
+CanConfig parse_can_config(std::string_view yaml_text, std::string_view source_name,
+                           const LineConfig& line);
+
+// Worst-case share of the bitrate used by one cycle's traffic (SYNC, PDOs, heartbeats).
+double estimate_bus_load(const CanConfig& config);
+
+}  // namespace fl::drivers

@@ -1,0 +1,193 @@
+// The CANopen master as the controller's ProcessIo: read() drains the received frames into
+// the input image, write() encodes the output image into RPDOs followed by SYNC. Both run
+// inside the 10 ms cycle: no allocation, no lock, no blocking call (fixed receive buffer, a
+// COB-ID routing table, a lock-free event ring drained by a non-real-time thread).
+//
+// Start-up (outside the cycle, start_up()): NMT reset of every node, wait for each boot-up
+// message, SDO configuration (heartbeat producer time, PDO COB-IDs, mappings and
+// transmission types, CiA 402 profile velocity mode and ramps), NMT start, and optionally
+// the CiA 402 enable sequence up to Operation Enabled.
+//
+// Safe reactions (each also reported as an event):
+// - drive heartbeat lost (no heartbeat within its timeout), CiA 402 fault, an EMCY with a
+//   non-zero error code, a node that left NMT Operational, bus off: the drive shows
+//   fault = true, ready = false in the input image (the logic then stops the line);
+// - an I/O module lost or not operational, or bus off: estop_ok = false, the inputs of that
+//   module read as their safe values (no beam, no buttons), so the logic disables every drive.
+// A drive fault is reset (controlword 0x80 edge) only while the operator's fault reset
+// button is pressed: the same acknowledgement the line's state machine needs.
+// A node that rebooted (boot-up message while running) stays faulted until start_up()
+// runs again: its SDO configuration was lost with the reboot.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fl/controller/runtime.hpp"
+#include "fl/drivers/can_bus.hpp"
+#include "fl/drivers/can_config.hpp"
+#include "fl/drivers/canopen.hpp"
+#include "fl/drivers/canopen_cia402.hpp"
+#include "fl/drivers/canopen_sdo_client.hpp"
+
+namespace fl::drivers {
+
+enum class CanopenEventKind : std::uint8_t {
+  kHeartbeatLost,
+  kHeartbeatRecovered,
+  kBootUp,             // the node (re)booted
+  kNmtStateChanged,    // heartbeat shows another NMT state
+  kEmergency,          // code, error register
+  kEmergencyCleared,   // EMCY 0x0000
+  kDriveStateChanged,  // CiA 402 state, from the statusword
+  kBusStateChanged,    // transport error state
+};
+const char* to_string(CanopenEventKind kind);
+
+struct CanopenEvent {
+  CanopenEventKind kind = CanopenEventKind::kHeartbeatLost;
+  canopen::NodeId node = 0;
+  std::int64_t time_ns = 0;
+  std::uint32_t code = 0;   // EMCY error code, NMT state, CiA 402 state or bus error state
+  std::uint8_t detail = 0;  // EMCY error register
+};
+// "node 3: EMCY 0x2310 continuous over current (register 0x03)"
+std::string describe(const CanopenEvent& event);
+
+struct CanopenCounters {
+  std::uint64_t frames_handled = 0;
+  std::uint64_t unknown_cob_id = 0;    // a frame no configured node sends
+  std::uint64_t malformed_frames = 0;  // wrong DLC, invalid heartbeat byte, RTR, 29-bit id
+  std::uint64_t unexpected_sdo = 0;    // SDO responses while no transfer runs
+  std::uint64_t events_dropped = 0;    // event ring full: the consumer is too slow
+  std::uint64_t send_failures = 0;     // RPDO or SYNC not queued
+  std::uint64_t syncs_sent = 0;
+};
+
+// What a node looks like to the master now.
+struct NodeStatus {
+  canopen::NodeId node = 0;
+  bool heard = false;  // any heartbeat since start-up
+  bool lost = false;   // heartbeat timeout passed
+  canopen::NmtState nmt = canopen::NmtState::kBootUp;
+  bool rebooted = false;        // boot-up seen after start-up: needs start_up() again
+  std::uint16_t emcy_code = 0;  // latest EMCY error code (0: none or cleared)
+  cia402::State drive_state = cia402::State::kUnknown;  // drives only
+};
+
+struct StartupReport {
+  bool ok = false;
+  std::vector<std::string> problems;  // one line each: node, step, reason
+  std::int64_t duration_ns = 0;
+};
+
+class CanopenIo final : public ProcessIo {
+ public:
+  CanopenIo(CanBus& bus, CanConfig config);
+
+  // Outside the cycle. Runs the whole start-up; enable_drives also takes every drive to
+  // Operation Enabled at zero speed.
+  StartupReport start_up(const BusClock& clock, bool enable_drives);
+
+  void read(std::int64_t now_ns, InputImage& in) override;
+  void write(const OutputImage& out) override;
+
+  // Any one thread other than the scan thread (single consumer).
+  bool pop_event(CanopenEvent& event);
+  // Pops every pending event and logs it with spdlog; returns how many.
+  std::size_t log_events();
+
+  // Read these while the cycle is not running (plain fields written by the scan thread).
+  [[nodiscard]] NodeStatus drive_status(DriveId drive) const;
+  [[nodiscard]] NodeStatus io_status(IoModuleId module) const;
+  [[nodiscard]] const CanopenCounters& counters() const { return counters_; }
+  [[nodiscard]] const CanConfig& config() const { return config_; }
+
+  // Scaling, exposed for tests and tools.
+  [[nodiscard]] std::int32_t velocity_to_drive_units(DriveId drive, float speed_mps) const;
+  [[nodiscard]] std::uint32_t acceleration_to_drive_units(DriveId drive, float accel_mps2) const;
+
+  static constexpr std::size_t kReceiveBatch = 64;
+  // Bounded drain: a babbling node cannot keep read() busy past 8 batches (512 frames,
+  // more than five times one cycle's configured traffic).
+  static constexpr std::size_t kMaxBatchesPerRead = 8;
+  static constexpr std::size_t kEventCapacity = 256;
+
+ private:
+  static constexpr std::size_t kNodeCount = kDriveCount + kIoModuleCount;
+  enum class Route : std::uint8_t {
+    kNone,
+    kHeartbeat,
+    kEmergency,
+    kSdoResponse,
+    kDriveTpdo1,
+    kDriveTpdo2,
+    kIoTpdo1
+  };
+  struct RouteEntry {
+    Route route = Route::kNone;
+    std::uint8_t slot = 0;  // node slot (0..15) or drive/module index
+  };
+  struct NodeRuntime {
+    canopen::NodeId id = 0;
+    std::int64_t timeout_ns = 0;
+    std::int64_t last_heartbeat_ns = 0;
+    bool heard = false;
+    bool lost = false;
+    bool rebooted = false;
+    canopen::NmtState nmt = canopen::NmtState::kBootUp;
+    std::uint16_t emcy_code = 0;
+  };
+  struct DriveRuntime {
+    std::uint16_t statusword = 0;
+    cia402::State state = cia402::State::kUnknown;
+    bool status_received = false;
+    std::int32_t last_position_raw = 0;
+    bool position_received = false;
+    std::int64_t encoder_counts = 0;  // unwrapped from the 32-bit position actual
+    std::int32_t velocity_raw = 0;
+    std::uint32_t last_accel_sent = 0;
+    bool accel_sent = false;
+  };
+  struct IoRuntime {
+    std::uint8_t digital_inputs = 0;
+    std::array<std::int16_t, 3> analog_inputs{};
+    bool received = false;
+  };
+
+  void build_routes();
+  void handle_frame(const CanFrame& frame, std::int64_t now_ns);
+  void check_timeouts(std::int64_t now_ns);
+  void fill_image(InputImage& in) const;
+  void push_event(CanopenEventKind kind, canopen::NodeId node, std::int64_t time_ns,
+                  std::uint32_t code, std::uint8_t detail = 0);
+  [[nodiscard]] bool node_healthy(std::size_t slot) const;
+  [[nodiscard]] NodeStatus status_of(std::size_t slot) const;
+  bool configure_drive(SdoClient& sdo, std::size_t drive, std::vector<std::string>& problems);
+  bool configure_io(SdoClient& sdo, std::size_t module, std::vector<std::string>& problems);
+  bool write_pdo(SdoClient& sdo, canopen::NodeId node, std::uint16_t communication_index,
+                 std::uint16_t mapping_index, std::uint32_t cob_id, std::uint8_t transmission_type,
+                 const canopen::PdoMapping& mapping, std::vector<std::string>& problems);
+
+  CanBus& bus_;
+  CanConfig config_;
+  std::array<RouteEntry, 2048> routes_{};        // by 11-bit COB-ID
+  std::array<NodeRuntime, kNodeCount> nodes_{};  // drives first, then I/O modules
+  std::array<DriveRuntime, kDriveCount> drives_{};
+  std::array<IoRuntime, kIoModuleCount> io_{};
+  std::array<CanFrame, kReceiveBatch> receive_buffer_{};
+  std::int64_t now_ns_ = 0;
+  bool fault_reset_pressed_ = false;
+  bool reset_phase_ = false;
+  CanErrorState bus_state_ = CanErrorState::kErrorActive;
+  CanopenCounters counters_;
+
+  std::array<CanopenEvent, kEventCapacity> events_{};
+  std::atomic<std::size_t> event_head_{0};  // next to pop (consumer)
+  std::atomic<std::size_t> event_tail_{0};  // next to push (producer: the scan thread)
+};
+
+}  // namespace fl::drivers

@@ -1,0 +1,732 @@
+#include "fl/drivers/canopen_io.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "fl/controller/config_loader.hpp"
+
+namespace fl::drivers {
+
+using canopen::NmtState;
+using canopen::NodeId;
+using canopen::SdoAddress;
+
+namespace {
+
+// Signals on the I/O modules' channels (config/can.yaml documents the same table).
+namespace infeed_io {
+constexpr std::uint8_t kBeamBrokenBit = 0x01;
+constexpr std::uint8_t kLevellerOverloadBit = 0x02;
+constexpr std::size_t kLevelChannel = 0;
+constexpr std::size_t kHopperOpeningChannel = 1;
+constexpr std::size_t kLevellerSpeedChannel = 2;
+}  // namespace infeed_io
+namespace stations_io {
+constexpr std::uint8_t kPlate1FlippingBit = 0x01;
+constexpr std::uint8_t kPlate2FlippingBit = 0x02;
+constexpr std::uint8_t kSqueezeDownBit = 0x04;
+constexpr std::size_t kCentringPositionChannel = 0;
+constexpr std::uint8_t kPlate1FlipOut = 0x01;
+constexpr std::uint8_t kPlate2FlipOut = 0x02;
+constexpr std::uint8_t kCentringStrokeOut = 0x04;
+constexpr std::uint8_t kSqueezeDownOut = 0x08;
+constexpr std::uint8_t kFinalRejectOut = 0x10;
+}  // namespace stations_io
+namespace safety_io {
+constexpr std::uint8_t kEstopChainClosedBit = 0x01;
+constexpr std::uint8_t kStartBit = 0x02;
+constexpr std::uint8_t kStopBit = 0x04;
+constexpr std::uint8_t kFaultResetBit = 0x08;
+constexpr std::uint8_t kRunningLampOut = 0x01;
+constexpr std::uint8_t kFaultLampOut = 0x02;
+}  // namespace safety_io
+
+constexpr std::uint8_t kSynchronous = 1;    // PDO transmission type: every SYNC
+constexpr std::uint8_t kEventDriven = 255;  // RPDO: applied on receipt
+constexpr std::uint16_t kProfileVelocityMode = 3;
+constexpr std::uint32_t kDeviceProfileMask = 0xFFFF;  // 0x1000 low word: the CiA profile
+constexpr std::uint32_t kDriveProfile = 402;
+constexpr std::uint32_t kIoProfile = 401;
+
+std::int16_t to_analog_counts(float value, float units_per_count) {
+  const double counts =
+      std::round(static_cast<double>(value) / static_cast<double>(units_per_count));
+  return static_cast<std::int16_t>(std::clamp(counts, -32768.0, 32767.0));
+}
+
+std::string hex(std::uint32_t value, int digits) {
+  char text[16];
+  std::snprintf(text, sizeof text, "0x%0*X", digits, value);
+  return text;
+}
+
+}  // namespace
+
+const char* to_string(CanopenEventKind kind) {
+  switch (kind) {
+    case CanopenEventKind::kHeartbeatLost:
+      return "heartbeat lost";
+    case CanopenEventKind::kHeartbeatRecovered:
+      return "heartbeat recovered";
+    case CanopenEventKind::kBootUp:
+      return "boot-up";
+    case CanopenEventKind::kNmtStateChanged:
+      return "NMT state";
+    case CanopenEventKind::kEmergency:
+      return "EMCY";
+    case CanopenEventKind::kEmergencyCleared:
+      return "EMCY cleared";
+    case CanopenEventKind::kDriveStateChanged:
+      return "CiA 402 state";
+    case CanopenEventKind::kBusStateChanged:
+      return "bus state";
+  }
+  return "unknown";
+}
+
+std::string describe(const CanopenEvent& event) {
+  std::string text = "node " + std::to_string(event.node) + ": " + to_string(event.kind);
+  switch (event.kind) {
+    case CanopenEventKind::kEmergency:
+      text += " " + hex(event.code, 4) + " " +
+              canopen::describe_emcy_code(static_cast<std::uint16_t>(event.code)) + " (register " +
+              hex(event.detail, 2) + ")";
+      break;
+    case CanopenEventKind::kNmtStateChanged:
+      text += std::string(" ") + canopen::to_string(static_cast<NmtState>(event.code));
+      break;
+    case CanopenEventKind::kDriveStateChanged:
+      text += std::string(" ") + cia402::to_string(static_cast<cia402::State>(event.code));
+      break;
+    case CanopenEventKind::kBusStateChanged:
+      text = std::string("bus: ") + to_string(static_cast<CanErrorState>(event.code));
+      break;
+    default:
+      break;
+  }
+  return text;
+}
+
+CanopenIo::CanopenIo(CanBus& bus, CanConfig config) : bus_(bus), config_(std::move(config)) {
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    nodes_[d].id = config_.drives[d].node_id;
+    nodes_[d].timeout_ns = std::int64_t{config_.drives[d].heartbeat_timeout_ms} * 1'000'000;
+  }
+  for (std::size_t m = 0; m < kIoModuleCount; ++m) {
+    nodes_[kDriveCount + m].id = config_.io_modules[m].node_id;
+    nodes_[kDriveCount + m].timeout_ns =
+        std::int64_t{config_.io_modules[m].heartbeat_timeout_ms} * 1'000'000;
+  }
+  build_routes();
+}
+
+void CanopenIo::build_routes() {
+  const auto route = [this](std::uint32_t cob_id, Route kind, std::size_t slot) {
+    routes_[cob_id & kCanStandardIdMask] = RouteEntry{kind, static_cast<std::uint8_t>(slot)};
+  };
+  for (std::size_t slot = 0; slot < kNodeCount; ++slot) {
+    route(canopen::kHeartbeatBase + nodes_[slot].id, Route::kHeartbeat, slot);
+    route(canopen::kEmcyBase + nodes_[slot].id, Route::kEmergency, slot);
+    route(canopen::kSdoResponseBase + nodes_[slot].id, Route::kSdoResponse, slot);
+  }
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    route(config_.drives[d].tpdo1_cob_id, Route::kDriveTpdo1, d);
+    route(config_.drives[d].tpdo2_cob_id, Route::kDriveTpdo2, d);
+  }
+  for (std::size_t m = 0; m < kIoModuleCount; ++m) {
+    route(config_.io_modules[m].tpdo1_cob_id, Route::kIoTpdo1, m);
+  }
+}
+
+std::int32_t CanopenIo::velocity_to_drive_units(DriveId drive, float speed_mps) const {
+  const DriveNodeConfig& node = config_.drives[index(drive)];
+  const double limited =
+      std::clamp(static_cast<double>(speed_mps), -static_cast<double>(node.max_speed_mps),
+                 static_cast<double>(node.max_speed_mps));
+  const double units = std::round(limited * node.velocity_units_per_mps);
+  return static_cast<std::int32_t>(std::clamp(units, -2147483648.0, 2147483647.0));
+}
+
+std::uint32_t CanopenIo::acceleration_to_drive_units(DriveId drive, float accel_mps2) const {
+  const DriveNodeConfig& node = config_.drives[index(drive)];
+  // No ramp given (0) means the drive's limit: a zero ramp would never reach the target.
+  const double wanted = accel_mps2 > 0.0F ? static_cast<double>(accel_mps2)
+                                          : static_cast<double>(node.max_accel_mps2);
+  const double limited = std::min(wanted, static_cast<double>(node.max_accel_mps2));
+  const double units = std::round(limited * node.acceleration_units_per_mps2);
+  return static_cast<std::uint32_t>(std::clamp(units, 1.0, 4294967295.0));
+}
+
+// ---------------------------------------------------------------- the cycle
+
+void CanopenIo::read(std::int64_t now_ns, InputImage& in) {
+  now_ns_ = now_ns;
+  for (std::size_t batch = 0; batch < kMaxBatchesPerRead; ++batch) {
+    const std::size_t count = bus_.receive(receive_buffer_);
+    for (std::size_t i = 0; i < count; ++i) {
+      handle_frame(receive_buffer_[i], now_ns);
+    }
+    if (count < receive_buffer_.size()) {
+      break;
+    }
+  }
+  const CanErrorState bus_state = bus_.error_state();
+  if (bus_state != bus_state_) {
+    bus_state_ = bus_state;
+    push_event(CanopenEventKind::kBusStateChanged, 0, now_ns,
+               static_cast<std::uint32_t>(bus_state));
+  }
+  check_timeouts(now_ns);
+  fill_image(in);
+}
+
+void CanopenIo::handle_frame(const CanFrame& frame, std::int64_t now_ns) {
+  ++counters_.frames_handled;
+  if (frame.extended || frame.remote || frame.error || frame.dlc > kCanMaxDataBytes) {
+    ++counters_.malformed_frames;  // CANopen uses 11-bit data frames only
+    return;
+  }
+  const RouteEntry entry = routes_[frame.id & kCanStandardIdMask];
+  switch (entry.route) {
+    case Route::kNone:
+      ++counters_.unknown_cob_id;
+      return;
+    case Route::kHeartbeat: {
+      const auto state = canopen::decode_heartbeat(frame);
+      if (!state) {
+        ++counters_.malformed_frames;
+        return;
+      }
+      NodeRuntime& node = nodes_[entry.slot];
+      node.last_heartbeat_ns = now_ns;
+      node.heard = true;
+      if (node.lost) {
+        node.lost = false;
+        push_event(CanopenEventKind::kHeartbeatRecovered, node.id, now_ns, 0);
+      }
+      if (*state == NmtState::kBootUp) {
+        node.rebooted = true;  // cleared by start_up() after it configured the node
+        push_event(CanopenEventKind::kBootUp, node.id, now_ns, 0);
+        node.nmt = NmtState::kPreOperational;  // a booted node enters pre-operational
+        return;
+      }
+      if (*state != node.nmt) {
+        node.nmt = *state;
+        push_event(CanopenEventKind::kNmtStateChanged, node.id, now_ns,
+                   static_cast<std::uint32_t>(*state));
+      }
+      return;
+    }
+    case Route::kEmergency: {
+      const auto emergency = canopen::decode_emcy(frame);
+      if (!emergency) {
+        ++counters_.malformed_frames;
+        return;
+      }
+      NodeRuntime& node = nodes_[entry.slot];
+      node.emcy_code = emergency->error_code;
+      push_event(emergency->error_code == 0 ? CanopenEventKind::kEmergencyCleared
+                                            : CanopenEventKind::kEmergency,
+                 node.id, now_ns, emergency->error_code, emergency->error_register);
+      return;
+    }
+    case Route::kSdoResponse:
+      ++counters_.unexpected_sdo;  // no SDO transfer runs inside the cycle
+      return;
+    case Route::kDriveTpdo1: {
+      std::array<std::uint32_t, 2> values{};
+      if (!canopen::unpack_pdo(frame, canopen::layout::kDriveTpdo1, values)) {
+        ++counters_.malformed_frames;
+        return;
+      }
+      DriveRuntime& drive = drives_[entry.slot];
+      drive.statusword = static_cast<std::uint16_t>(values[0]);
+      const cia402::State state = cia402::decode_statusword(drive.statusword);
+      if (state != drive.state) {
+        drive.state = state;
+        push_event(CanopenEventKind::kDriveStateChanged, nodes_[entry.slot].id, now_ns,
+                   static_cast<std::uint32_t>(state));
+      }
+      drive.status_received = true;
+      const std::int32_t position = sign_extend(values[1], 32);
+      if (drive.position_received) {
+        // Unwrap the 32-bit counter: the difference modulo 2^32 is the travel since the
+        // last TPDO (far less than 2^31 counts in one cycle).
+        const std::uint32_t delta_raw = static_cast<std::uint32_t>(position) -
+                                        static_cast<std::uint32_t>(drive.last_position_raw);
+        drive.encoder_counts += sign_extend(delta_raw, 32);
+      } else {
+        drive.encoder_counts = position;
+        drive.position_received = true;
+      }
+      drive.last_position_raw = position;
+      return;
+    }
+    case Route::kDriveTpdo2: {
+      std::array<std::uint32_t, 1> values{};
+      if (!canopen::unpack_pdo(frame, canopen::layout::kDriveTpdo2, values)) {
+        ++counters_.malformed_frames;
+        return;
+      }
+      drives_[entry.slot].velocity_raw = sign_extend(values[0], 32);
+      return;
+    }
+    case Route::kIoTpdo1: {
+      std::array<std::uint32_t, 4> values{};
+      if (!canopen::unpack_pdo(frame, canopen::layout::kIoTpdo1, values)) {
+        ++counters_.malformed_frames;
+        return;
+      }
+      IoRuntime& module = io_[entry.slot];
+      module.digital_inputs = static_cast<std::uint8_t>(values[0]);
+      for (std::size_t i = 0; i < module.analog_inputs.size(); ++i) {
+        module.analog_inputs[i] = static_cast<std::int16_t>(sign_extend(values[1 + i], 16));
+      }
+      module.received = true;
+      return;
+    }
+  }
+}
+
+void CanopenIo::check_timeouts(std::int64_t now_ns) {
+  for (NodeRuntime& node : nodes_) {
+    if (node.heard && !node.lost && now_ns - node.last_heartbeat_ns > node.timeout_ns) {
+      node.lost = true;
+      push_event(CanopenEventKind::kHeartbeatLost, node.id, now_ns, 0);
+    }
+  }
+}
+
+bool CanopenIo::node_healthy(std::size_t slot) const {
+  const NodeRuntime& node = nodes_[slot];
+  return node.heard && !node.lost && !node.rebooted && node.nmt == NmtState::kOperational &&
+         bus_state_ != CanErrorState::kBusOff;
+}
+
+void CanopenIo::fill_image(InputImage& in) const {
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    const DriveRuntime& drive = drives_[d];
+    const bool healthy = node_healthy(d) && drive.status_received;
+    const bool drive_fault =
+        drive.state == cia402::State::kFault || drive.state == cia402::State::kFaultReactionActive;
+    DriveFeedback& feedback = in.drives[d];
+    feedback.fault = !healthy || drive_fault || nodes_[d].emcy_code != 0;
+    feedback.ready = !feedback.fault && drive.state == cia402::State::kOperationEnabled;
+    feedback.speed_mps = healthy ? static_cast<float>(static_cast<double>(drive.velocity_raw) /
+                                                      config_.drives[d].velocity_units_per_mps)
+                                 : 0.0F;
+    feedback.encoder_counts = drive.encoder_counts;  // held while lost: no travel invented
+  }
+
+  const auto module_ok = [this](IoModuleId id) {
+    return node_healthy(kDriveCount + index(id)) && io_[index(id)].received;
+  };
+  const IoScaling& scaling = config_.io_scaling;
+  const bool infeed_ok = module_ok(IoModuleId::kInfeed);
+  const bool stations_ok = module_ok(IoModuleId::kStations);
+  const bool safety_ok = module_ok(IoModuleId::kSafety);
+  const IoRuntime& infeed = io_[index(IoModuleId::kInfeed)];
+  const IoRuntime& stations = io_[index(IoModuleId::kStations)];
+  const IoRuntime& safety = io_[index(IoModuleId::kSafety)];
+
+  if (infeed_ok) {
+    in.takt_beam_broken = (infeed.digital_inputs & infeed_io::kBeamBrokenBit) != 0;
+    in.leveller_overload = (infeed.digital_inputs & infeed_io::kLevellerOverloadBit) != 0;
+    in.level_mm = infeed.analog_inputs[infeed_io::kLevelChannel] * scaling.level_mm_per_count;
+    in.hopper_opening_mm = infeed.analog_inputs[infeed_io::kHopperOpeningChannel] *
+                           scaling.hopper_opening_mm_per_count;
+    in.leveller_speed_rpm =
+        infeed.analog_inputs[infeed_io::kLevellerSpeedChannel] * scaling.leveller_rpm_per_count;
+  } else {
+    in.takt_beam_broken = false;
+    in.leveller_overload = true;  // the leveller's own fault path stops the infeed
+    in.level_mm = 0.0F;
+    in.hopper_opening_mm = 0.0F;
+    in.leveller_speed_rpm = 0.0F;
+  }
+  if (stations_ok) {
+    in.flip_plate1_flipping = (stations.digital_inputs & stations_io::kPlate1FlippingBit) != 0;
+    in.flip_plate2_flipping = (stations.digital_inputs & stations_io::kPlate2FlippingBit) != 0;
+    in.squeeze_roller_down = (stations.digital_inputs & stations_io::kSqueezeDownBit) != 0;
+    in.centring_position_mm = stations.analog_inputs[stations_io::kCentringPositionChannel] *
+                              scaling.centring_mm_per_count;
+  }  // else: the last values stay; estop_ok below stops the line
+  const bool all_io_ok = infeed_ok && stations_ok && safety_ok;
+  in.estop_ok = all_io_ok && (safety.digital_inputs & safety_io::kEstopChainClosedBit) != 0;
+  in.start_request = safety_ok && (safety.digital_inputs & safety_io::kStartBit) != 0;
+  in.stop_request = !safety_ok || (safety.digital_inputs & safety_io::kStopBit) != 0;
+  in.fault_reset_request = safety_ok && (safety.digital_inputs & safety_io::kFaultResetBit) != 0;
+}
+
+void CanopenIo::write(const OutputImage& out) {
+  fault_reset_pressed_ =
+      (io_[index(IoModuleId::kSafety)].digital_inputs & safety_io::kFaultResetBit) != 0 &&
+      node_healthy(kDriveCount + index(IoModuleId::kSafety));
+  reset_phase_ = !reset_phase_;
+  const auto send = [this](const CanFrame& frame) {
+    if (!bus_.send(frame)) {
+      ++counters_.send_failures;
+    }
+  };
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    const DriveCommand& command = out.drives[d];
+    const DriveNodeConfig& node = config_.drives[d];
+    DriveRuntime& drive = drives_[d];
+    const cia402::Goal goal = command.enable                   ? cia402::Goal::kOperationEnabled
+                              : out.state == LineState::kFault ? cia402::Goal::kQuickStop
+                                                               : cia402::Goal::kSwitchedOn;
+    const std::uint16_t controlword =
+        cia402::master_controlword(drive.state, goal, fault_reset_pressed_, reset_phase_);
+    const std::int32_t target =
+        command.enable && drive.state == cia402::State::kOperationEnabled
+            ? velocity_to_drive_units(static_cast<DriveId>(d), command.speed_mps)
+            : 0;
+    const std::array<std::uint32_t, 2> rpdo1{controlword, to_wire(target)};
+    send(canopen::pack_pdo(node.rpdo1_cob_id, canopen::layout::kDriveRpdo1, rpdo1));
+
+    const std::uint32_t accel =
+        acceleration_to_drive_units(static_cast<DriveId>(d), command.accel_mps2);
+    if (!drive.accel_sent || accel != drive.last_accel_sent) {
+      const std::array<std::uint32_t, 2> rpdo2{accel, accel};
+      if (bus_.send(canopen::pack_pdo(node.rpdo2_cob_id, canopen::layout::kDriveRpdo2, rpdo2))) {
+        drive.last_accel_sent = accel;
+        drive.accel_sent = true;
+      } else {
+        ++counters_.send_failures;  // retried next cycle: accel_sent stays behind
+      }
+    }
+  }
+
+  const IoScaling& scaling = config_.io_scaling;
+  {
+    const std::array<std::uint32_t, 4> values{
+        0U,
+        to_wire(to_analog_counts(out.hopper_opening_mm, scaling.hopper_opening_mm_per_count)) &
+            0xFFFFU,
+        to_wire(to_analog_counts(out.leveller_speed_rpm, scaling.leveller_rpm_per_count)) & 0xFFFFU,
+        0U};
+    send(canopen::pack_pdo(config_.io_modules[index(IoModuleId::kInfeed)].rpdo1_cob_id,
+                           canopen::layout::kIoRpdo1, values));
+  }
+  {
+    std::uint8_t outputs = 0;
+    outputs |= out.flip_plate1_flip ? stations_io::kPlate1FlipOut : 0;
+    outputs |= out.flip_plate2_flip ? stations_io::kPlate2FlipOut : 0;
+    outputs |= out.centring_stroke ? stations_io::kCentringStrokeOut : 0;
+    outputs |= out.squeeze_roller_down ? stations_io::kSqueezeDownOut : 0;
+    outputs |= out.final_reject ? stations_io::kFinalRejectOut : 0;
+    const std::array<std::uint32_t, 4> values{
+        outputs,
+        to_wire(to_analog_counts(out.centring_shift_mm, scaling.centring_mm_per_count)) & 0xFFFFU,
+        0U, 0U};
+    send(canopen::pack_pdo(config_.io_modules[index(IoModuleId::kStations)].rpdo1_cob_id,
+                           canopen::layout::kIoRpdo1, values));
+  }
+  {
+    std::uint8_t lamps = 0;
+    lamps |= out.state == LineState::kRunning ? safety_io::kRunningLampOut : 0;
+    lamps |= out.state == LineState::kFault ? safety_io::kFaultLampOut : 0;
+    const std::array<std::uint32_t, 4> values{lamps, 0U, 0U, 0U};
+    send(canopen::pack_pdo(config_.io_modules[index(IoModuleId::kSafety)].rpdo1_cob_id,
+                           canopen::layout::kIoRpdo1, values));
+  }
+  // SYNC last: synchronous RPDOs take effect at it, and the TPDOs it triggers carry the
+  // state the next read() sees.
+  if (bus_.send(canopen::make_sync())) {
+    ++counters_.syncs_sent;
+  } else {
+    ++counters_.send_failures;
+  }
+}
+
+// ---------------------------------------------------------------- events and status
+
+void CanopenIo::push_event(CanopenEventKind kind, NodeId node, std::int64_t time_ns,
+                           std::uint32_t code, std::uint8_t detail) {
+  const std::size_t tail = event_tail_.load(std::memory_order_relaxed);
+  const std::size_t head = event_head_.load(std::memory_order_acquire);
+  if (tail - head >= kEventCapacity) {
+    ++counters_.events_dropped;
+    return;
+  }
+  events_[tail % kEventCapacity] = CanopenEvent{kind, node, time_ns, code, detail};
+  event_tail_.store(tail + 1, std::memory_order_release);
+}
+
+bool CanopenIo::pop_event(CanopenEvent& event) {
+  const std::size_t head = event_head_.load(std::memory_order_relaxed);
+  const std::size_t tail = event_tail_.load(std::memory_order_acquire);
+  if (head == tail) {
+    return false;
+  }
+  event = events_[head % kEventCapacity];
+  event_head_.store(head + 1, std::memory_order_release);
+  return true;
+}
+
+std::size_t CanopenIo::log_events() {
+  std::size_t count = 0;
+  CanopenEvent event;
+  while (pop_event(event)) {
+    ++count;
+    const bool bad = event.kind == CanopenEventKind::kHeartbeatLost ||
+                     event.kind == CanopenEventKind::kEmergency ||
+                     (event.kind == CanopenEventKind::kBusStateChanged && event.code != 0);
+    if (bad) {
+      spdlog::warn("canopen: {}", describe(event));
+    } else {
+      spdlog::info("canopen: {}", describe(event));
+    }
+  }
+  return count;
+}
+
+NodeStatus CanopenIo::status_of(std::size_t slot) const {
+  const NodeRuntime& node = nodes_[slot];
+  NodeStatus status;
+  status.node = node.id;
+  status.heard = node.heard;
+  status.lost = node.lost;
+  status.nmt = node.nmt;
+  status.rebooted = node.rebooted;
+  status.emcy_code = node.emcy_code;
+  if (slot < kDriveCount) {
+    status.drive_state = drives_[slot].state;
+  }
+  return status;
+}
+
+NodeStatus CanopenIo::drive_status(DriveId drive) const { return status_of(index(drive)); }
+NodeStatus CanopenIo::io_status(IoModuleId module) const {
+  return status_of(kDriveCount + index(module));
+}
+
+// ---------------------------------------------------------------- start-up
+
+bool CanopenIo::write_pdo(SdoClient& sdo, NodeId node, std::uint16_t communication_index,
+                          std::uint16_t mapping_index, std::uint32_t cob_id,
+                          std::uint8_t transmission_type, const canopen::PdoMapping& mapping,
+                          std::vector<std::string>& problems) {
+  // CiA 301 7.5.2.35/36: a PDO's mapping may only change while the PDO is invalid (bit 31)
+  // and its mapping count is 0.
+  struct Step {
+    SdoAddress address;
+    std::uint32_t value;
+    std::uint8_t size;
+  };
+  std::vector<Step> steps;
+  steps.push_back({{communication_index, 1}, cob_id | canopen::kPdoCobIdInvalid, 4});
+  steps.push_back({{mapping_index, 0}, 0, 1});
+  for (std::uint8_t i = 0; i < mapping.count; ++i) {
+    steps.push_back(
+        {{mapping_index, static_cast<std::uint8_t>(i + 1)}, mapping.entries[i].mapping_value(), 4});
+  }
+  steps.push_back({{mapping_index, 0}, mapping.count, 1});
+  steps.push_back({{communication_index, 2}, transmission_type, 1});
+  steps.push_back({{communication_index, 1}, cob_id, 4});
+  for (const Step& step : steps) {
+    const SdoResult result = sdo.download(node, step.address, step.value, step.size);
+    if (!result.ok()) {
+      problems.push_back("node " + std::to_string(node) + ": SDO write " +
+                         hex(step.address.index, 4) + ":" + hex(step.address.subindex, 2) + " = " +
+                         hex(step.value, 8) + " failed: " + result.describe());
+      return false;
+    }
+  }
+  return true;
+}
+
+bool CanopenIo::configure_drive(SdoClient& sdo, std::size_t d, std::vector<std::string>& problems) {
+  const DriveNodeConfig& node = config_.drives[d];
+  const NodeId id = node.node_id;
+  const std::string who = "drive " + std::string(config_name(static_cast<DriveId>(d))) + " (node " +
+                          std::to_string(id) + ")";
+  const SdoResult device_type = sdo.upload(id, {0x1000, 0});
+  if (!device_type.ok()) {
+    problems.push_back(who + ": SDO read 0x1000 failed: " + device_type.describe());
+    return false;
+  }
+  if ((device_type.value & kDeviceProfileMask) != kDriveProfile) {
+    problems.push_back(who + ": device type " + hex(device_type.value, 8) +
+                       " is not a CiA 402 drive");
+    return false;
+  }
+  const auto write = [&](SdoAddress address, std::uint32_t value, std::uint8_t size) {
+    const SdoResult result = sdo.download(id, address, value, size);
+    if (!result.ok()) {
+      problems.push_back(who + ": SDO write " + hex(address.index, 4) + ":" +
+                         hex(address.subindex, 2) + " failed: " + result.describe());
+    }
+    return result.ok();
+  };
+  const std::uint32_t max_accel =
+      acceleration_to_drive_units(static_cast<DriveId>(d), node.max_accel_mps2);
+  const bool written = write({0x1017, 0}, node.heartbeat_producer_ms, 2) &&
+                       write_pdo(sdo, id, 0x1400, 0x1600, node.rpdo1_cob_id, kSynchronous,
+                                 canopen::layout::kDriveRpdo1, problems) &&
+                       write_pdo(sdo, id, 0x1401, 0x1601, node.rpdo2_cob_id, kEventDriven,
+                                 canopen::layout::kDriveRpdo2, problems) &&
+                       write_pdo(sdo, id, 0x1800, 0x1A00, node.tpdo1_cob_id, kSynchronous,
+                                 canopen::layout::kDriveTpdo1, problems) &&
+                       write_pdo(sdo, id, 0x1801, 0x1A01, node.tpdo2_cob_id, node.tpdo2_every_syncs,
+                                 canopen::layout::kDriveTpdo2, problems) &&
+                       write({0x6060, 0}, kProfileVelocityMode, 1) &&
+                       write({0x6083, 0}, max_accel, 4) && write({0x6084, 0}, max_accel, 4);
+  if (!written) {
+    return false;
+  }
+  const SdoResult mode = sdo.upload(id, {0x6061, 0});  // modes of operation display
+  if (!mode.ok() || mode.value != kProfileVelocityMode) {
+    problems.push_back(who + ": mode of operation display is not profile velocity (3): " +
+                       (mode.ok() ? std::to_string(mode.value) : mode.describe()));
+    return false;
+  }
+  drives_[d].last_accel_sent = max_accel;
+  drives_[d].accel_sent = true;
+  return true;
+}
+
+bool CanopenIo::configure_io(SdoClient& sdo, std::size_t m, std::vector<std::string>& problems) {
+  const IoModuleConfig& node = config_.io_modules[m];
+  const NodeId id = node.node_id;
+  const std::string who = "I/O module " + std::string(config_name(static_cast<IoModuleId>(m))) +
+                          " (node " + std::to_string(id) + ")";
+  const SdoResult device_type = sdo.upload(id, {0x1000, 0});
+  if (!device_type.ok()) {
+    problems.push_back(who + ": SDO read 0x1000 failed: " + device_type.describe());
+    return false;
+  }
+  if ((device_type.value & kDeviceProfileMask) != kIoProfile) {
+    problems.push_back(who + ": device type " + hex(device_type.value, 8) +
+                       " is not a CiA 401 I/O module");
+    return false;
+  }
+  const SdoResult heartbeat = sdo.download(id, {0x1017, 0}, node.heartbeat_producer_ms, 2);
+  if (!heartbeat.ok()) {
+    problems.push_back(who + ": SDO write 0x1017 failed: " + heartbeat.describe());
+    return false;
+  }
+  return write_pdo(sdo, id, 0x1400, 0x1600, node.rpdo1_cob_id, kSynchronous,
+                   canopen::layout::kIoRpdo1, problems) &&
+         write_pdo(sdo, id, 0x1800, 0x1A00, node.tpdo1_cob_id, kSynchronous,
+                   canopen::layout::kIoTpdo1, problems);
+}
+
+StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
+  StartupReport report;
+  const std::int64_t started_ns = clock.now_ns();
+  for (NodeRuntime& node : nodes_) {
+    node.heard = false;
+    node.lost = false;
+    node.rebooted = false;
+    node.emcy_code = 0;
+    node.nmt = NmtState::kBootUp;
+  }
+  drives_ = {};
+  io_ = {};
+
+  // 1. NMT reset node: every device restarts from its defaults and sends boot-up.
+  if (!bus_.send(canopen::make_nmt(canopen::NmtCommand::kResetNode, canopen::kAllNodes))) {
+    report.problems.push_back("NMT reset node could not be sent");
+    return report;
+  }
+  const std::int64_t boot_deadline_ns =
+      clock.now_ns() + std::int64_t{config_.boot_timeout_ms} * 1'000'000;
+  while (true) {
+    const std::size_t count = bus_.receive(receive_buffer_);
+    for (std::size_t i = 0; i < count; ++i) {
+      handle_frame(receive_buffer_[i], clock.now_ns());
+    }
+    const bool all_booted =
+        std::all_of(nodes_.begin(), nodes_.end(), [](const NodeRuntime& n) { return n.rebooted; });
+    if (all_booted) {
+      break;
+    }
+    if (clock.now_ns() >= boot_deadline_ns) {
+      for (std::size_t slot = 0; slot < kNodeCount; ++slot) {
+        if (!nodes_[slot].rebooted) {
+          report.problems.push_back(
+              "node " + std::to_string(nodes_[slot].id) + " (" +
+              (slot < kDriveCount
+                   ? "drive " + std::string(config_name(static_cast<DriveId>(slot)))
+                   : "I/O module " +
+                         std::string(config_name(static_cast<IoModuleId>(slot - kDriveCount)))) +
+              "): no boot-up message within " + std::to_string(config_.boot_timeout_ms) + " ms");
+        }
+      }
+      break;
+    }
+    if (count == 0) {
+      clock.wait_ns(SdoClient::kPollStepNs);
+    }
+  }
+
+  // 2. SDO configuration of every node that booted.
+  SdoClient sdo(bus_, clock, std::int64_t{config_.sdo_timeout_ms} * 1'000'000,
+                [this, &clock](const CanFrame& frame) { handle_frame(frame, clock.now_ns()); });
+  bool configured = report.problems.empty();
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    if (nodes_[d].rebooted) {
+      configured = configure_drive(sdo, d, report.problems) && configured;
+    }
+  }
+  for (std::size_t m = 0; m < kIoModuleCount; ++m) {
+    if (nodes_[kDriveCount + m].rebooted) {
+      configured = configure_io(sdo, m, report.problems) && configured;
+    }
+  }
+
+  // 3. NMT start: PDOs flow from the next SYNC on.
+  if (!bus_.send(canopen::make_nmt(canopen::NmtCommand::kStart, canopen::kAllNodes))) {
+    report.problems.push_back("NMT start could not be sent");
+    configured = false;
+  }
+  const std::int64_t now = clock.now_ns();
+  for (NodeRuntime& node : nodes_) {
+    node.rebooted = false;
+    node.last_heartbeat_ns = now;  // the consumer timeouts start now
+    // The heartbeat will confirm; until then the master takes its own command as the state.
+    node.nmt = NmtState::kOperational;
+  }
+
+  // 4. CiA 402 enable, one transition per cycle as the statuswords confirm.
+  if (configured && enable_drives) {
+    OutputImage out{};
+    out.state = LineState::kStarting;
+    for (DriveCommand& command : out.drives) {
+      command.enable = true;
+    }
+    InputImage in{};
+    const std::int64_t enable_deadline_ns =
+        clock.now_ns() + std::int64_t{config_.enable_timeout_ms} * 1'000'000;
+    bool all_enabled = false;
+    while (!all_enabled && clock.now_ns() < enable_deadline_ns) {
+      write(out);
+      clock.wait_ns(config_.cycle_period_ns);
+      read(clock.now_ns(), in);
+      all_enabled = std::all_of(in.drives.begin(), in.drives.end(),
+                                [](const DriveFeedback& feedback) { return feedback.ready; });
+    }
+    if (!all_enabled) {
+      for (std::size_t d = 0; d < kDriveCount; ++d) {
+        if (!in.drives[d].ready) {
+          report.problems.push_back("drive " + std::string(config_name(static_cast<DriveId>(d))) +
+                                    " (node " + std::to_string(nodes_[d].id) +
+                                    "): not in operation enabled within " +
+                                    std::to_string(config_.enable_timeout_ms) + " ms, state " +
+                                    cia402::to_string(drives_[d].state));
+        }
+      }
+      configured = false;
+    }
+  }
+  report.ok = configured && report.problems.empty();
+  report.duration_ns = clock.now_ns() - started_ns;
+  return report;
+}
+
+}  // namespace fl::drivers

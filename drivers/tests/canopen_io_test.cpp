@@ -1,0 +1,339 @@
+// The master (CanopenIo) against emulated CiA 402 drives and CiA 401 modules on the
+// loopback bus: start-up, velocity scaling, I/O mapping, heartbeat loss and recovery, EMCY,
+// malformed frames, and the real-time contract of read()/write().
+#include "fl/drivers/canopen_io.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "loopback_rig.hpp"
+#include "scan_thread_probe.hpp"
+
+namespace fl::drivers {
+namespace {
+
+using test::all_drives;
+using test::LoopbackRig;
+
+TEST(CanopenIo, StartUpConfiguresEveryNodeAndReachesOperationEnabled) {
+  LoopbackRig rig;
+  const StartupReport report = rig.start(true);
+  ASSERT_TRUE(report.ok) << (report.problems.empty() ? "" : report.problems.front());
+  rig.io.read(rig.now_ns, rig.in);
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    const auto& drive = *rig.drives[d];
+    EXPECT_EQ(drive.nmt_state(), canopen::NmtState::kOperational);
+    EXPECT_EQ(drive.state().state, cia402::State::kOperationEnabled);
+    EXPECT_EQ(drive.state().mode, 3);  // profile velocity
+    // The mapping the master wrote: RPDO1 = controlword + target velocity, on its COB-ID.
+    EXPECT_EQ(drive.value(0x1600, 0), 2U);
+    EXPECT_EQ(drive.value(0x1600, 2), 0x60FF0020U);
+    EXPECT_EQ(drive.value(0x1400, 1), rig.config.drives[d].rpdo1_cob_id);
+    EXPECT_EQ(drive.value(0x1017, 0), 50U);  // heartbeat producer from can.yaml
+    // Ramps at the line's limit: takt 8 m/s^2, others 5 or 6, times 10000 units.
+    EXPECT_EQ(
+        drive.state().acceleration,
+        static_cast<std::uint32_t>(std::lround(rig.config.drives[d].max_accel_mps2 * 10000.0)));
+    EXPECT_TRUE(rig.in.drives[d].ready);
+    EXPECT_FALSE(rig.in.drives[d].fault);
+  }
+  // NMT reset, 16 boot-ups, about 20 SDO transfers per node and three enable cycles: well
+  // under the 5 s boot plus 1 s enable budget of can.yaml on the simulated clock.
+  EXPECT_LT(report.duration_ns, 1'000'000'000);
+}
+
+TEST(CanopenIo, StartUpNamesANodeThatNeverBoots) {
+  LoopbackRig rig;
+  rig.drive(DriveId::kGuide).set_silent(true);
+  const StartupReport report = rig.start(true);
+  EXPECT_FALSE(report.ok);
+  ASSERT_FALSE(report.problems.empty());
+  EXPECT_NE(report.problems.front().find("node 5 (drive guide): no boot-up"), std::string::npos)
+      << report.problems.front();
+}
+
+TEST(CanopenIo, VelocityCommandReachesTheDriveScaled) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  OutputImage out = all_drives(true, 0.5F);
+  out.drives[index(DriveId::kReject)].speed_mps = -1.0F;  // reversing
+  out.drives[index(DriveId::kOutfeed)].speed_mps = 3.0F;  // beyond the 1 m/s limit
+  rig.scan(out);
+  // 0.5 m/s * 10000 counts/s per m/s = 5000, applied at the SYNC after the RPDO.
+  EXPECT_EQ(rig.drive(DriveId::kGuide).state().target_velocity, 5000);
+  EXPECT_EQ(rig.drive(DriveId::kReject).state().target_velocity, -10000);
+  EXPECT_EQ(rig.drive(DriveId::kOutfeed).state().target_velocity, 10000);  // clamped to 1 m/s
+  // 0.2 s later the drives ramp at 5 m/s^2 (50000 counts/s^2): 0.5 m/s reached after 0.1 s.
+  for (int i = 0; i < 20; ++i) {
+    rig.scan(out);
+  }
+  rig.io.read(rig.now_ns, rig.in);
+  EXPECT_NEAR(rig.in.drives[index(DriveId::kGuide)].speed_mps, 0.5F, 1e-4F);
+  EXPECT_NEAR(rig.in.drives[index(DriveId::kReject)].speed_mps, -1.0F, 1e-4F);
+  // The encoder counts the travel: 10 counts per mm of belt.
+  const double travel_mm =
+      static_cast<double>(rig.drive(DriveId::kGuide).state().position_actual) / 10.0;
+  EXPECT_EQ(rig.in.drives[index(DriveId::kGuide)].encoder_counts,
+            rig.drive(DriveId::kGuide).state().position_actual);
+  // 0.21 s of commands minus the 0.1 s ramp's half: about 80 mm.
+  EXPECT_NEAR(travel_mm, 80.0, 6.0);
+}
+
+TEST(CanopenIo, AccelerationIsSentOnChangeWithinTheLimit) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  OutputImage out = all_drives(true, 0.1F);
+  out.drives[index(DriveId::kTakt)].accel_mps2 = 6.0F;    // a takt stroke
+  out.drives[index(DriveId::kGuide)].accel_mps2 = 50.0F;  // over its 5 m/s^2 limit
+  rig.scan(out);
+  rig.scan(out);
+  EXPECT_EQ(rig.drive(DriveId::kTakt).state().acceleration, 60000U);
+  EXPECT_EQ(rig.drive(DriveId::kGuide).state().deceleration, 50000U);
+}
+
+TEST(CanopenIo, DisableStopsAtSwitchedOnAndLineFaultQuickStops) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  rig.scan(all_drives(false, 0.0F, LineState::kStopped));
+  EXPECT_EQ(rig.drive(DriveId::kBulk).state().state, cia402::State::kSwitchedOn);
+  rig.scan(all_drives(true, 0.0F));
+  EXPECT_EQ(rig.drive(DriveId::kBulk).state().state, cia402::State::kOperationEnabled);
+  rig.scan(all_drives(false, 0.0F, LineState::kFault));
+  // Quick stop active at once, then Switch On Disabled once the motor stands (it stood).
+  EXPECT_EQ(rig.drive(DriveId::kBulk).state().state, cia402::State::kSwitchOnDisabled);
+}
+
+TEST(CanopenIo, IoModulesMapToTheProcessImage) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  auto& infeed = rig.module(IoModuleId::kInfeed).state();
+  infeed.digital_inputs = 0x01;               // DI0: laser barrier broken
+  infeed.analog_inputs = {6000, 4500, 1200};  // 60 mm level, 45 mm hopper, 120 rpm
+  rig.module(IoModuleId::kStations).state().digital_inputs = 0x05;       // plate 1, squeeze down
+  rig.module(IoModuleId::kStations).state().analog_inputs[0] = -1250;    // -12.5 mm
+  rig.module(IoModuleId::kSafety).state().digital_inputs = 0x01 | 0x02;  // E-stop ok, start
+  OutputImage out = all_drives(true, 0.0F);
+  out.flip_plate2_flip = true;
+  out.final_reject = true;
+  out.centring_shift_mm = 23.4F;
+  out.hopper_opening_mm = 90.0F;
+  out.leveller_speed_rpm = 120.0F;
+  rig.scan(out);  // inputs sampled at this SYNC, outputs applied
+  rig.scan(out);
+  rig.io.read(rig.now_ns, rig.in);
+  EXPECT_TRUE(rig.in.takt_beam_broken);
+  EXPECT_FALSE(rig.in.leveller_overload);
+  EXPECT_NEAR(rig.in.level_mm, 60.0F, 1e-3F);
+  EXPECT_NEAR(rig.in.hopper_opening_mm, 45.0F, 1e-3F);
+  EXPECT_NEAR(rig.in.leveller_speed_rpm, 120.0F, 1e-3F);
+  EXPECT_TRUE(rig.in.flip_plate1_flipping);
+  EXPECT_FALSE(rig.in.flip_plate2_flipping);
+  EXPECT_TRUE(rig.in.squeeze_roller_down);
+  EXPECT_NEAR(rig.in.centring_position_mm, -12.5F, 1e-3F);
+  EXPECT_TRUE(rig.in.estop_ok);
+  EXPECT_TRUE(rig.in.start_request);
+  const auto& stations = rig.module(IoModuleId::kStations).state();
+  EXPECT_EQ(stations.digital_outputs, 0x02 | 0x10);  // DO1 plate 2, DO4 air knife
+  EXPECT_EQ(stations.analog_outputs[0], 2340);       // 23.4 mm / 0.01
+  EXPECT_EQ(rig.module(IoModuleId::kInfeed).state().analog_outputs[0], 9000);
+  EXPECT_EQ(rig.module(IoModuleId::kInfeed).state().analog_outputs[1], 1200);
+  EXPECT_EQ(rig.module(IoModuleId::kSafety).state().digital_outputs, 0x01);  // running lamp
+}
+
+TEST(CanopenIo, LostDriveFaultsWithinItsTimeoutAndRecovers) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  const OutputImage out = all_drives(true, 0.3F);
+  for (int i = 0; i < 10; ++i) {
+    rig.scan(out);
+  }
+  rig.drive(DriveId::kCentring).set_silent(true);
+  const std::int64_t silent_since = rig.now_ns;
+  std::int64_t fault_at = 0;
+  for (int i = 0; i < 50 && fault_at == 0; ++i) {
+    rig.scan(out);
+    if (rig.in.drives[index(DriveId::kCentring)].fault) {
+      fault_at = rig.now_ns;
+    }
+  }
+  ASSERT_NE(fault_at, 0) << "no fault within 0.5 s";
+  // Heartbeat every 50 ms, timeout 150 ms: the last heartbeat came at most 50 ms before the
+  // silence, so the fault shows between 100 and 150 ms plus one scan of detection delay.
+  // (The TPDOs stop at once, but only the heartbeat consumer judges a node lost.)
+  EXPECT_LE(fault_at - silent_since, 150'000'000 + 2 * LoopbackRig::kCycleNs);
+  EXPECT_GE(fault_at - silent_since, 100'000'000 - LoopbackRig::kCycleNs);
+  EXPECT_TRUE(rig.io.drive_status(DriveId::kCentring).lost);
+  EXPECT_FALSE(rig.in.drives[index(DriveId::kCentring)].ready);
+  EXPECT_FALSE(rig.in.drives[index(DriveId::kGuide)].fault);  // the others carry on
+
+  rig.drive(DriveId::kCentring).set_silent(false);
+  for (int i = 0; i < 10; ++i) {  // within one heartbeat period and a TPDO
+    rig.scan(out);
+  }
+  EXPECT_FALSE(rig.io.drive_status(DriveId::kCentring).lost);
+  EXPECT_FALSE(rig.in.drives[index(DriveId::kCentring)].fault);
+  EXPECT_TRUE(rig.in.drives[index(DriveId::kCentring)].ready);
+
+  std::vector<CanopenEventKind> kinds;
+  CanopenEvent event;
+  while (rig.io.pop_event(event)) {
+    if (event.node == rig.config.drives[index(DriveId::kCentring)].node_id) {
+      kinds.push_back(event.kind);
+    }
+  }
+  EXPECT_NE(std::find(kinds.begin(), kinds.end(), CanopenEventKind::kHeartbeatLost), kinds.end());
+  EXPECT_NE(std::find(kinds.begin(), kinds.end(), CanopenEventKind::kHeartbeatRecovered),
+            kinds.end());
+}
+
+TEST(CanopenIo, LostSafetyModuleOpensTheEstopChain) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  const OutputImage out = all_drives(true, 0.0F);
+  rig.scan(out);
+  rig.scan(out);
+  EXPECT_TRUE(rig.in.estop_ok);
+  rig.module(IoModuleId::kSafety).set_silent(true);
+  int scans = 0;
+  while (rig.in.estop_ok && scans < 20) {
+    rig.scan(out);
+    ++scans;
+  }
+  EXPECT_FALSE(rig.in.estop_ok);
+  // 60 ms timeout + up to one 20 ms heartbeat period + one scan: at most 9 scans.
+  EXPECT_LE(scans, 9);
+  EXPECT_TRUE(rig.in.stop_request);
+}
+
+TEST(CanopenIo, EmergencyFaultsTheDriveUntilTheOperatorResets) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  const OutputImage out = all_drives(true, 0.2F);
+  rig.scan(out);
+  rig.drive(DriveId::kSqueeze).inject_fault(0x2310);  // over current
+  rig.scan(out);
+  rig.scan(out);
+  const DriveFeedback& squeeze = rig.in.drives[index(DriveId::kSqueeze)];
+  EXPECT_TRUE(squeeze.fault);
+  EXPECT_FALSE(squeeze.ready);
+  EXPECT_EQ(rig.io.drive_status(DriveId::kSqueeze).emcy_code, 0x2310);
+  bool emcy_logged = false;
+  CanopenEvent event;
+  while (rig.io.pop_event(event)) {
+    if (event.kind == CanopenEventKind::kEmergency) {
+      emcy_logged = true;
+      EXPECT_EQ(event.code, 0x2310U);
+      EXPECT_EQ(event.detail, 0x01);
+      EXPECT_NE(describe(event).find("continuous over current"), std::string::npos);
+    }
+  }
+  EXPECT_TRUE(emcy_logged);
+  // No reset without the operator: still faulted 10 scans later.
+  for (int i = 0; i < 10; ++i) {
+    rig.scan(out);
+  }
+  EXPECT_TRUE(rig.in.drives[index(DriveId::kSqueeze)].fault);
+  // Fault reset button (safety DI3): 0x80 edge, EMCY 0x0000, then back to enabled.
+  rig.module(IoModuleId::kSafety).state().digital_inputs = 0x01 | 0x08;
+  for (int i = 0; i < 10; ++i) {
+    rig.scan(out);
+  }
+  EXPECT_FALSE(rig.in.drives[index(DriveId::kSqueeze)].fault);
+  EXPECT_TRUE(rig.in.drives[index(DriveId::kSqueeze)].ready);
+  EXPECT_EQ(rig.io.drive_status(DriveId::kSqueeze).emcy_code, 0);
+}
+
+TEST(CanopenIo, MalformedFramesAreCountedAndRefused) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  const OutputImage out = all_drives(true, 0.0F);
+  rig.scan(out);
+  const auto before = rig.io.counters();
+  const std::int64_t encoder_before = rig.in.drives[index(DriveId::kBulk)].encoder_counts;
+
+  CanFrame short_tpdo = make_frame(0x181, 3);  // TPDO1 needs 6 bytes
+  short_tpdo.data = {0x08, 0x00, 0xFF};        // would read as Fault if accepted
+  rig.master_bus.inject(short_tpdo);
+  CanFrame long_tpdo = make_frame(0x281, 8);  // TPDO2 needs 4 bytes
+  rig.master_bus.inject(long_tpdo);
+  rig.master_bus.inject(make_frame(0x7E5, 1));  // heartbeat of a node not on this bus
+  CanFrame bad_heartbeat = make_frame(0x701, 1);
+  bad_heartbeat.data[0] = 0x33;  // no such NMT state
+  rig.master_bus.inject(bad_heartbeat);
+  CanFrame short_emcy = make_frame(0x081, 4);
+  rig.master_bus.inject(short_emcy);
+  CanFrame remote = make_frame(0x181, 6);
+  remote.remote = true;
+  rig.master_bus.inject(remote);
+  CanFrame extended = make_frame(0x181, 6);
+  extended.extended = true;
+  rig.master_bus.inject(extended);
+  rig.master_bus.inject(make_frame(0x581, 8));  // SDO response with no transfer running
+
+  rig.io.read(rig.now_ns, rig.in);
+  const auto& after = rig.io.counters();
+  EXPECT_EQ(after.malformed_frames - before.malformed_frames, 6U);
+  EXPECT_EQ(after.unknown_cob_id - before.unknown_cob_id, 1U);
+  EXPECT_EQ(after.unexpected_sdo - before.unexpected_sdo, 1U);
+  EXPECT_FALSE(rig.in.drives[index(DriveId::kBulk)].fault);  // the short TPDO did nothing
+  EXPECT_EQ(rig.in.drives[index(DriveId::kBulk)].encoder_counts, encoder_before);
+}
+
+TEST(CanopenIo, BusOffFaultsEveryDrive) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  rig.scan(all_drives(true, 0.0F));
+  rig.master_bus.set_error_state(CanErrorState::kBusOff);
+  rig.io.read(rig.now_ns, rig.in);
+  for (const DriveFeedback& drive : rig.in.drives) {
+    EXPECT_TRUE(drive.fault);
+  }
+  EXPECT_FALSE(rig.in.estop_ok);
+  rig.master_bus.set_error_state(CanErrorState::kErrorActive);  // the kernel restarted it
+  rig.io.write(all_drives(true, 0.0F));
+  rig.advance(LoopbackRig::kCycleNs);
+  rig.io.read(rig.now_ns, rig.in);
+  EXPECT_FALSE(rig.in.drives[0].fault);
+}
+
+TEST(CanopenIo, PositionUnwrapsAcrossTheInt32Boundary) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  auto& drive = rig.drive(DriveId::kOutfeed);
+  drive.state().position_actual = 2147483647LL - 20000;  // 2 s of travel at 1 m/s from the wrap
+  const OutputImage out = all_drives(true, 1.0F);
+  rig.scan(out);
+  const std::int64_t start = rig.in.drives[index(DriveId::kOutfeed)].encoder_counts;
+  for (int i = 0; i < 300; ++i) {
+    rig.scan(out);
+  }
+  rig.io.read(rig.now_ns, rig.in);
+  const std::int64_t travelled = rig.in.drives[index(DriveId::kOutfeed)].encoder_counts - start;
+  EXPECT_EQ(travelled, drive.state().position_actual - (2147483647LL - 20000) -
+                           (start - (2147483647LL - 20000)));
+  EXPECT_GT(drive.state().position_actual, 2147483647LL);  // the wire value wrapped
+  EXPECT_GT(travelled, 25000);  // about 3 s at up to 1 m/s = 10000 counts/s
+}
+
+TEST(CanopenIo, ReadAndWriteNeitherAllocateNorLock) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  OutputImage out = all_drives(true, 0.4F);
+  rig.scan(out);
+  fl::test::reset_probe_counts();
+  for (int i = 0; i < 100; ++i) {
+    out.drives[0].accel_mps2 = i % 2 == 0 ? 1.0F : 2.0F;  // RPDO2 on change, too
+    fl::test::arm_probe_on_this_thread(true);
+    rig.io.read(rig.now_ns, rig.in);
+    rig.io.write(out);
+    fl::test::arm_probe_on_this_thread(false);
+    rig.advance(LoopbackRig::kCycleNs);  // the devices may allocate: not armed
+  }
+  const fl::test::ProbeCounts counts = fl::test::probe_counts();
+  EXPECT_EQ(counts.allocations, 0U);
+  EXPECT_EQ(counts.mutex_locks, 0U);
+}
+
+}  // namespace
+}  // namespace fl::drivers
