@@ -1,0 +1,228 @@
+// Force laws of the DEM engine as composable named parts, in the spirit of LAMMPS styles.
+//
+// A type pair's contact behaviour is a chain of ContactLaw objects applied in order to one
+// ForceAccumulator (e.g. "hertz_mindlin" -> "jkr" -> "coulomb"); a bonded pair uses one BondLaw
+// ("bpm"). Laws are created by name from a LawRegistry, configured with named parameters and the
+// pair's material (E*, G*).
+//
+// Adding an effect (visco-elastic bonds, plasticity, moisture-dependent friction, rolling
+// resistance, graded stiffness) is one class and one registration line:
+//
+//   class RollingResistance final : public ContactLaw {       // 1. the class
+//    public:
+//     RollingResistance(const LawParameters& p, const PairMaterial&)
+//         : mu_r_(p.at("rolling_friction")) {}
+//     void compute(const PairGeometry& g, PairState&, ForceAccumulator& f) const override {
+//       if (g.overlap_m > 0.0) f.torque_on_i_nm += ...;  // -mu_r * Fn * R* * omega_rel/|omega_rel|
+//     }
+//    private:
+//     double mu_r_;
+//   };
+//   // 2. in register_builtin_laws() (twin/src/dem/laws.cpp):
+//   registry.add_contact_law({"rolling_resistance", "EPSD-1 rolling friction",
+//                             {{"rolling_friction", "-", 0.0, 1.0, std::nullopt}},
+//                             make_contact_law<RollingResistance>});
+//
+// The YAML reader (config.hpp) then accepts `rolling_resistance: {rolling_friction: 0.01}` in an
+// interaction's contact chain with strict range checks taken from the parameter list.
+//
+// Units are SI (m, kg, s, N); names carry units where not obvious.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace fl::dem {
+
+using Vec3 = Eigen::Vector3d;
+
+// Named law parameters, e.g. {"restitution", 1e-4}. Missing optional ones take their default.
+using LawParameters = std::map<std::string, double, std::less<>>;
+
+// Material properties of one interacting pair, derived once per type pair.
+struct PairMaterial {
+  double effective_youngs_modulus_pa = 0.0;  // E*: 1/E* = (1-nu1^2)/E1 + (1-nu2^2)/E2
+  double effective_shear_modulus_pa = 0.0;   // G*: 1/G* = 2(2-nu1)(1+nu1)/E1 + 2(2-nu2)(1+nu2)/E2
+  bool with_wall = false;                    // one side is a wall (infinite mass)
+};
+
+// Geometry and kinematics of one sphere-sphere or sphere-wall pair at this step.
+struct PairGeometry {
+  Vec3 normal = Vec3::UnitZ();  // unit, from j (or the wall) towards i
+  double overlap_m = 0.0;       // r_i + r_j - distance (sphere-wall: r_i - distance); < 0: gap
+  Vec3 relative_velocity_m_per_s = Vec3::Zero();  // i's contact point relative to j's
+  double effective_radius_m = 0.0;                // R* = r_i r_j / (r_i + r_j); r_i for a wall
+  double effective_mass_kg = 0.0;                 // m* = m_i m_j / (m_i + m_j); m_i for a wall
+  double timestep_s = 0.0;
+};
+
+// History of one pair (kept while the pair stays in the neighbour list). Vectors are seen from
+// i; the engine negates them when it swaps i and j (after a particle re-ordering).
+struct PairState {
+  Vec3 tangential_displacement_m = Vec3::Zero();  // Mindlin tangential spring
+  std::array<double, 2> scalars{};                // free for laws with scalar history
+  std::uint32_t flags = 0;                        // bit flags owned by laws (see kFlag*)
+
+  static constexpr std::uint32_t kFlagAdhesiveNeck = 1U;  // jkr: neck formed, survives a gap
+  void reset() { *this = PairState{}; }
+  [[nodiscard]] bool active() const { return flags != 0 || !tangential_displacement_m.isZero(0.0); }
+};
+
+// What the chain builds for one pair. Force on i = (normal_force_n + normal_damping_force_n) *
+// normal + tangential forces; force on j is the opposite. Tangential forces act at the contact
+// point and so also give torques (added by the engine); torque_on_* are extra moments.
+struct ForceAccumulator {
+  double normal_force_n = 0.0;          // elastic + adhesive; > 0 pushes i away from j
+  double normal_damping_force_n = 0.0;  // dissipative normal part
+  double friction_normal_load_n = 0.0;  // load that Coulomb's mu multiplies (JKR raises it)
+  Vec3 tangential_elastic_force_n = Vec3::Zero();
+  Vec3 tangential_damping_force_n = Vec3::Zero();
+  double tangential_stiffness_n_per_m = 0.0;  // of the tangential spring, for Coulomb's rescale
+  Vec3 torque_on_i_nm = Vec3::Zero();
+  Vec3 torque_on_j_nm = Vec3::Zero();
+  double elastic_energy_j = 0.0;  // stored energy where a law defines it
+  bool touching = false;          // some law produced a force this step
+};
+
+class ContactLaw {
+ public:
+  virtual ~ContactLaw() = default;
+  virtual void compute(const PairGeometry& geometry, PairState& state,
+                       ForceAccumulator& force) const = 0;
+  // Largest gap (m) at which the law still acts, for a pair of this effective radius
+  // (adhesion necks); 0 for laws that act only on overlap.
+  [[nodiscard]] virtual double range_m(double effective_radius_m) const {
+    (void)effective_radius_m;
+    return 0.0;
+  }
+  // Contact stiffness scale (N/m) at this overlap, for the timestep check; 0 if none.
+  [[nodiscard]] virtual double normal_stiffness_n_per_m(double effective_radius_m,
+                                                        double overlap_m) const {
+    (void)effective_radius_m;
+    (void)overlap_m;
+    return 0.0;
+  }
+};
+
+// One bond between two particles, fixed at creation.
+struct BondGeometry {
+  Vec3 normal = Vec3::UnitZ();  // unit, from j towards i
+  double distance_m = 0.0;
+  double rest_length_m = 0.0;                     // distance when the bond formed
+  double bond_radius_m = 0.0;                     // smaller particle radius (before disk scale)
+  double break_distance_m = 0.0;                  // sum of the two contact radii
+  Vec3 relative_velocity_m_per_s = Vec3::Zero();  // i's bond point relative to j's
+  double timestep_s = 0.0;
+};
+
+struct BondState {
+  double normal_force_n = 0.0;        // > 0 pushes i away from j (compression)
+  Vec3 shear_force_n = Vec3::Zero();  // on i, perpendicular to the normal
+  std::array<double, 2> scalars{};    // free for laws with scalar history
+  bool broken = false;
+};
+
+struct BondForce {
+  double normal_force_n = 0.0;         // on i along the normal
+  Vec3 shear_force_n = Vec3::Zero();   // on i, acts at the bond point (torque added by engine)
+  Vec3 torque_on_i_nm = Vec3::Zero();  // bending/twisting moments (none in bpm)
+  Vec3 torque_on_j_nm = Vec3::Zero();
+  double elastic_energy_j = 0.0;
+};
+
+class BondLaw {
+ public:
+  virtual ~BondLaw() = default;
+  // Updates the state and the force; sets state.broken (and leaves no force) when it breaks.
+  virtual void compute(const BondGeometry& geometry, BondState& state, BondForce& force) const = 0;
+  // Spring constants (N/m) of a bond of this radius, for the timestep check.
+  [[nodiscard]] virtual double normal_stiffness_n_per_m(double bond_radius_m) const = 0;
+  [[nodiscard]] virtual double shear_stiffness_n_per_m(double bond_radius_m) const = 0;
+};
+
+// A parameter a law accepts, with its allowed closed range and optional default.
+struct LawParameterInfo {
+  std::string name;
+  std::string unit;
+  double min = 0.0;
+  double max = 0.0;
+  std::optional<double> default_value;
+};
+
+template <typename Law>
+struct LawInfo {
+  std::string name;
+  std::string description;
+  std::vector<LawParameterInfo> parameters;
+  std::function<std::unique_ptr<Law>(const LawParameters&, const PairMaterial&)> factory;
+};
+
+template <typename Law, typename Impl>
+std::unique_ptr<Law> make_law(const LawParameters& parameters, const PairMaterial& material) {
+  return std::make_unique<Impl>(parameters, material);
+}
+template <typename Impl>
+std::unique_ptr<ContactLaw> make_contact_law(const LawParameters& p, const PairMaterial& m) {
+  return make_law<ContactLaw, Impl>(p, m);
+}
+template <typename Impl>
+std::unique_ptr<BondLaw> make_bond_law(const LawParameters& p, const PairMaterial& m) {
+  return make_law<BondLaw, Impl>(p, m);
+}
+
+// Name -> factory. builtin() holds the laws of this engine (register_builtin_laws).
+class LawRegistry {
+ public:
+  static const LawRegistry& builtin();
+
+  void add_contact_law(LawInfo<ContactLaw> info);
+  void add_bond_law(LawInfo<BondLaw> info);
+
+  [[nodiscard]] const LawInfo<ContactLaw>* find_contact_law(std::string_view name) const;
+  [[nodiscard]] const LawInfo<BondLaw>* find_bond_law(std::string_view name) const;
+  [[nodiscard]] std::vector<std::string> contact_law_names() const;
+  [[nodiscard]] std::vector<std::string> bond_law_names() const;
+
+  // Creates a law; throws std::invalid_argument naming an unknown law, an unknown or missing
+  // parameter or one out of range.
+  [[nodiscard]] std::unique_ptr<ContactLaw> create_contact_law(std::string_view name,
+                                                               const LawParameters& parameters,
+                                                               const PairMaterial& material) const;
+  [[nodiscard]] std::unique_ptr<BondLaw> create_bond_law(std::string_view name,
+                                                         const LawParameters& parameters,
+                                                         const PairMaterial& material) const;
+
+ private:
+  std::map<std::string, LawInfo<ContactLaw>, std::less<>> contact_laws_;
+  std::map<std::string, LawInfo<BondLaw>, std::less<>> bond_laws_;
+};
+
+void register_builtin_laws(LawRegistry& registry);
+
+// JKR theory (Johnson, Kendall & Roberts 1971, Proc. R. Soc. A 324:301; as written in
+// Johnson, Contact Mechanics, 1985, sec. 5.5), with w the work of adhesion (J/m^2; the
+// "interfacial surface energy" of the configuration):
+//   F(a) = 4 E* a^3 / (3 R*) - sqrt(8 pi w E* a^3),  delta(a) = a^2 / R* - sqrt(2 pi w a / E*)
+// Pull-off force (load controlled): F_c = 1.5 pi w R*. The neck breaks (displacement
+// controlled) at a^3 = pi w R*^2 / (8 E*), i.e. at the most negative overlap delta_c.
+double jkr_pull_off_force_n(double work_of_adhesion_j_per_m2, double effective_radius_m);
+double jkr_break_overlap_m(double work_of_adhesion_j_per_m2, double effective_radius_m,
+                           double effective_youngs_modulus_pa);
+// Contact radius a on the stable branch for a given overlap (>= delta_c), and its force.
+double jkr_contact_radius_m(double work_of_adhesion_j_per_m2, double effective_radius_m,
+                            double effective_youngs_modulus_pa, double overlap_m);
+double jkr_force_n(double work_of_adhesion_j_per_m2, double effective_radius_m,
+                   double effective_youngs_modulus_pa, double contact_radius_m);
+
+// Damping ratio factor of eqs. 3.2-3.3: beta = -ln(e) / sqrt(ln^2(e) + pi^2).
+double restitution_damping_factor(double restitution);
+
+}  // namespace fl::dem

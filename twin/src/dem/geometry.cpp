@@ -1,0 +1,36 @@
+#include "fl/twin/dem/geometry.hpp"
+
+namespace fl::dem {
+
+ClosestPoint closest_point_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a;
+  const Vec3 ac = c - a;
+  const Vec3 ap = p - a;
+  const double d1 = ab.dot(ap);
+  const double d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return {a, TriangleFeature::kVertex};
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp);
+  const double d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) return {b, TriangleFeature::kVertex};
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    return {a + (d1 / (d1 - d3)) * ab, TriangleFeature::kEdge};
+  }
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp);
+  const double d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) return {c, TriangleFeature::kVertex};
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    return {a + (d2 / (d2 - d6)) * ac, TriangleFeature::kEdge};
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    return {b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b), TriangleFeature::kEdge};
+  }
+  const double denominator = 1.0 / (va + vb + vc);
+  return {a + ab * (vb * denominator) + ac * (vc * denominator), TriangleFeature::kFace};
+}
+
+}  // namespace fl::dem

@@ -1,0 +1,393 @@
+// Built-in force laws (hertz_mindlin, coulomb, jkr, bpm) and the law registry.
+#include "fl/twin/dem/laws.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace fl::dem {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+const double kSqrtFiveSixths = std::sqrt(5.0 / 6.0);
+
+// Keeps a history vector in the current tangent plane at its old length (the pair rotated).
+inline void rotate_into_tangent_plane(Vec3& vector, const Vec3& normal) {
+  const double old_squared = vector.squaredNorm();
+  if (old_squared == 0.0) {
+    return;
+  }
+  vector -= vector.dot(normal) * normal;
+  const double new_squared = vector.squaredNorm();
+  if (new_squared > 0.0) {
+    vector *= std::sqrt(old_squared / new_squared);
+  }
+}
+
+// Eq. 3.1 with the damping of eqs. 3.2-3.3 (EDEM / LIGGGHTS Hertz-Mindlin):
+//   S_n = 2 E* sqrt(R* d),  F_n = 4/3 E* sqrt(R*) d^1.5,   F_n^d = -2 sqrt(5/6) beta sqrt(S_n m*)
+//   v_n S_t = 8 G* sqrt(R* d),  F_t = -S_t xi (xi: tangential spring history), F_t^d = -2 sqrt(5/6)
+//   beta sqrt(S_t m*) v_t,  beta = -ln e / sqrt(ln^2 e + pi^2).
+// The tangential spring is not limited here (see coulomb).
+class HertzMindlin final : public ContactLaw {
+ public:
+  HertzMindlin(const LawParameters& parameters, const PairMaterial& material)
+      : youngs_pa_(material.effective_youngs_modulus_pa),
+        shear_pa_(material.effective_shear_modulus_pa),
+        damping_factor_(2.0 * kSqrtFiveSixths *
+                        restitution_damping_factor(parameters.at("restitution"))) {}
+
+  void compute(const PairGeometry& g, PairState& state, ForceAccumulator& f) const override {
+    if (g.overlap_m <= 0.0) {
+      state.tangential_displacement_m.setZero();
+      return;
+    }
+    const double sqrt_radius_overlap = std::sqrt(g.effective_radius_m * g.overlap_m);
+    const double normal_stiffness = 2.0 * youngs_pa_ * sqrt_radius_overlap;  // S_n
+    const double elastic_normal = (2.0 / 3.0) * normal_stiffness * g.overlap_m;
+    const double normal_velocity = g.relative_velocity_m_per_s.dot(g.normal);
+    const double damping_normal =
+        -damping_factor_ * std::sqrt(normal_stiffness * g.effective_mass_kg) * normal_velocity;
+
+    const Vec3 tangential_velocity = g.relative_velocity_m_per_s - normal_velocity * g.normal;
+    Vec3& xi = state.tangential_displacement_m;
+    rotate_into_tangent_plane(xi, g.normal);
+    xi += tangential_velocity * g.timestep_s;
+    const double tangential_stiffness = 8.0 * shear_pa_ * sqrt_radius_overlap;  // S_t
+
+    f.normal_force_n += elastic_normal;
+    f.normal_damping_force_n += damping_normal;
+    f.friction_normal_load_n += elastic_normal + damping_normal;
+    f.tangential_elastic_force_n -= tangential_stiffness * xi;
+    f.tangential_damping_force_n -= damping_factor_ *
+                                    std::sqrt(tangential_stiffness * g.effective_mass_kg) *
+                                    tangential_velocity;
+    f.tangential_stiffness_n_per_m = tangential_stiffness;
+    // Hertz: integral of F_n = 8/15 E* sqrt(R*) d^2.5 = 2/5 F_n d; Mindlin spring: S_t xi^2 / 2.
+    f.elastic_energy_j +=
+        0.4 * elastic_normal * g.overlap_m + 0.5 * tangential_stiffness * xi.squaredNorm();
+    f.touching = true;
+  }
+
+  [[nodiscard]] double normal_stiffness_n_per_m(double effective_radius_m,
+                                                double overlap_m) const override {
+    return 2.0 * youngs_pa_ * std::sqrt(effective_radius_m * overlap_m);
+  }
+
+ private:
+  double youngs_pa_;
+  double shear_pa_;
+  double damping_factor_;  // 2 sqrt(5/6) beta
+};
+
+// Coulomb limit of the tangential force: |F_t| <= mu * |load|. While sliding, the spring is
+// shortened to the limit and the tangential damping dropped (EDEM / LIGGGHTS behaviour), so a
+// resting contact keeps its static friction up to mu * load.
+class Coulomb final : public ContactLaw {
+ public:
+  Coulomb(const LawParameters& parameters, const PairMaterial&)
+      : friction_coefficient_(parameters.at("friction_coefficient")) {}
+
+  void compute(const PairGeometry&, PairState& state, ForceAccumulator& f) const override {
+    if (!f.touching) {
+      return;
+    }
+    const double limit = friction_coefficient_ * std::abs(f.friction_normal_load_n);
+    const double elastic = f.tangential_elastic_force_n.norm();
+    if (elastic > limit) {
+      const double scale = elastic > 0.0 ? limit / elastic : 0.0;
+      f.tangential_elastic_force_n *= scale;
+      state.tangential_displacement_m *= scale;
+      f.tangential_damping_force_n.setZero();
+    } else if ((f.tangential_elastic_force_n + f.tangential_damping_force_n).norm() > limit) {
+      f.tangential_damping_force_n.setZero();  // sticking spring, damping beyond the limit
+    }
+  }
+
+ private:
+  double friction_coefficient_;
+};
+
+// JKR adhesion (formulas at jkr_force_n in laws.hpp). Replaces the chain's elastic normal force
+// by the JKR force for the same overlap; the neck forms on touching and survives a gap down to
+// delta_c. Friction load is |F + 2 F_c| (as LAMMPS' granular jkr). Uses PairState::scalars[0]
+// to warm-start the contact-radius solve.
+class Jkr final : public ContactLaw {
+ public:
+  Jkr(const LawParameters& parameters, const PairMaterial& material)
+      : work_of_adhesion_(parameters.at("surface_energy_j_per_m2")),
+        youngs_pa_(material.effective_youngs_modulus_pa) {}
+
+  void compute(const PairGeometry& g, PairState& state, ForceAccumulator& f) const override {
+    if (work_of_adhesion_ <= 0.0) {
+      return;
+    }
+    if (g.overlap_m > 0.0) {
+      state.flags |= PairState::kFlagAdhesiveNeck;
+    } else if ((state.flags & PairState::kFlagAdhesiveNeck) == 0U ||
+               g.overlap_m <=
+                   jkr_break_overlap_m(work_of_adhesion_, g.effective_radius_m, youngs_pa_)) {
+      state.flags &= ~PairState::kFlagAdhesiveNeck;
+      state.scalars[0] = 0.0;
+      return;
+    }
+    const double radius = g.effective_radius_m;
+    // Newton on x = sqrt(a): f(x) = x^4 - R c x - R delta, c = sqrt(2 pi w / E*). f is convex
+    // for x > 0, so Newton from any x on the stable branch (f' > 0) converges monotonically.
+    const double c = std::sqrt(2.0 * kPi * work_of_adhesion_ / youngs_pa_);
+    const double rc = radius * c;
+    const double x_turn = std::cbrt(rc / 4.0);  // f'(x_turn) = 0
+    double x = state.scalars[0];
+    if (!(x > x_turn * 1.0000001)) {
+      x = std::cbrt(rc) + std::sqrt(std::sqrt(radius * std::abs(g.overlap_m)));
+    }
+    for (int iteration = 0; iteration < 40; ++iteration) {
+      const double x3 = x * x * x;
+      const double value = x3 * x - rc * x - radius * g.overlap_m;
+      const double slope = 4.0 * x3 - rc;
+      const double step = value / slope;
+      x -= step;
+      if (x < x_turn) {
+        x = x_turn;
+      }
+      if (std::abs(step) <= 1e-13 * x) {
+        break;
+      }
+    }
+    state.scalars[0] = x;
+    const double a = x * x;
+    const double force = jkr_force_n(work_of_adhesion_, radius, youngs_pa_, a);
+    const double hertz = g.overlap_m > 0.0 ? (4.0 / 3.0) * youngs_pa_ * std::sqrt(radius) *
+                                                 std::pow(g.overlap_m, 1.5)
+                                           : 0.0;
+    f.normal_force_n += force - hertz;  // replace the Hertz part of an earlier hertz_mindlin
+    f.friction_normal_load_n =
+        std::abs(force + 2.0 * jkr_pull_off_force_n(work_of_adhesion_, radius));
+    f.touching = true;
+  }
+
+  [[nodiscard]] double range_m(double effective_radius_m) const override {
+    return work_of_adhesion_ > 0.0
+               ? -jkr_break_overlap_m(work_of_adhesion_, effective_radius_m, youngs_pa_)
+               : 0.0;
+  }
+
+ private:
+  double work_of_adhesion_;
+  double youngs_pa_;
+};
+
+// Bonded particle model (Potyondy & Cundall 2004; thesis eqs. 3.4-3.5, EDEM bondingV2 without
+// torque feedback): A = pi (disk_scale R_b)^2,
+//   normal: dF_n = -v_n S_n A dt, i.e. F_n = -S_n A (d - d0) (its exact integral, no drift),
+//   shear:  dF_t = -v_t S_t A dt, history rotated with the bond.
+// No damping, no bending or twisting moment. Breaks when the tensile normal stress -F_n/A
+// exceeds normal_strength_pa, the shear stress |F_t|/A exceeds shear_strength_pa, or the
+// centres separate beyond the sum of the contact radii.
+class BondedParticleModel final : public BondLaw {
+ public:
+  BondedParticleModel(const LawParameters& parameters, const PairMaterial&)
+      : normal_stiffness_(parameters.at("normal_stiffness_n_per_m3")),
+        shear_stiffness_(parameters.at("shear_stiffness_n_per_m3")),
+        normal_strength_(parameters.at("normal_strength_pa")),
+        shear_strength_(parameters.at("shear_strength_pa")),
+        disk_scale_(parameters.at("bonded_disk_scale")) {}
+
+  void compute(const BondGeometry& g, BondState& state, BondForce& f) const override {
+    if (g.distance_m > g.break_distance_m) {
+      state.broken = true;
+      return;
+    }
+    const double radius = disk_scale_ * g.bond_radius_m;
+    const double area = kPi * radius * radius;
+    const double normal_velocity = g.relative_velocity_m_per_s.dot(g.normal);
+    const Vec3 tangential_velocity = g.relative_velocity_m_per_s - normal_velocity * g.normal;
+    state.normal_force_n = -normal_stiffness_ * area * (g.distance_m - g.rest_length_m);
+    rotate_into_tangent_plane(state.shear_force_n, g.normal);
+    state.shear_force_n -= shear_stiffness_ * area * g.timestep_s * tangential_velocity;
+    if (-state.normal_force_n > normal_strength_ * area ||
+        state.shear_force_n.norm() > shear_strength_ * area) {
+      state.broken = true;
+      return;
+    }
+    f.normal_force_n = state.normal_force_n;
+    f.shear_force_n = state.shear_force_n;
+    f.elastic_energy_j =
+        state.normal_force_n * state.normal_force_n / (2.0 * normal_stiffness_ * area) +
+        state.shear_force_n.squaredNorm() / (2.0 * shear_stiffness_ * area);
+  }
+
+  [[nodiscard]] double normal_stiffness_n_per_m(double bond_radius_m) const override {
+    const double radius = disk_scale_ * bond_radius_m;
+    return normal_stiffness_ * kPi * radius * radius;
+  }
+  [[nodiscard]] double shear_stiffness_n_per_m(double bond_radius_m) const override {
+    const double radius = disk_scale_ * bond_radius_m;
+    return shear_stiffness_ * kPi * radius * radius;
+  }
+
+ private:
+  double normal_stiffness_;
+  double shear_stiffness_;
+  double normal_strength_;
+  double shear_strength_;
+  double disk_scale_;
+};
+
+template <typename Law>
+LawParameters complete_parameters(const LawInfo<Law>& info, const LawParameters& given) {
+  LawParameters complete;
+  for (const auto& [name, value] : given) {
+    const auto known = std::find_if(info.parameters.begin(), info.parameters.end(),
+                                    [&](const LawParameterInfo& p) { return p.name == name; });
+    if (known == info.parameters.end()) {
+      throw std::invalid_argument("law '" + info.name + "': unknown parameter '" + name + "'");
+    }
+    if (!(value >= known->min && value <= known->max)) {
+      throw std::invalid_argument(
+          "law '" + info.name + "': parameter '" + name + "' = " + std::to_string(value) +
+          " outside [" + std::to_string(known->min) + ", " + std::to_string(known->max) + "]");
+    }
+    complete[name] = value;
+  }
+  for (const LawParameterInfo& p : info.parameters) {
+    if (complete.count(p.name) == 0) {
+      if (!p.default_value) {
+        throw std::invalid_argument("law '" + info.name + "': missing parameter '" + p.name + "'");
+      }
+      complete[p.name] = *p.default_value;
+    }
+  }
+  return complete;
+}
+
+template <typename Map>
+std::vector<std::string> keys_of(const Map& map) {
+  std::vector<std::string> names;
+  for (const auto& entry : map) {
+    names.push_back(entry.first);
+  }
+  return names;
+}
+
+}  // namespace
+
+double restitution_damping_factor(double restitution) {
+  if (restitution >= 1.0) {
+    return 0.0;
+  }
+  const double log_e = std::log(restitution);
+  return -log_e / std::sqrt(log_e * log_e + kPi * kPi);
+}
+
+double jkr_pull_off_force_n(double work_of_adhesion_j_per_m2, double effective_radius_m) {
+  return 1.5 * kPi * work_of_adhesion_j_per_m2 * effective_radius_m;
+}
+
+double jkr_break_overlap_m(double work_of_adhesion_j_per_m2, double effective_radius_m,
+                           double effective_youngs_modulus_pa) {
+  const double a = std::cbrt(kPi * work_of_adhesion_j_per_m2 * effective_radius_m *
+                             effective_radius_m / (8.0 * effective_youngs_modulus_pa));
+  return a * a / effective_radius_m -
+         std::sqrt(2.0 * kPi * work_of_adhesion_j_per_m2 * a / effective_youngs_modulus_pa);
+}
+
+double jkr_contact_radius_m(double work_of_adhesion_j_per_m2, double effective_radius_m,
+                            double effective_youngs_modulus_pa, double overlap_m) {
+  const double rc = effective_radius_m *
+                    std::sqrt(2.0 * kPi * work_of_adhesion_j_per_m2 / effective_youngs_modulus_pa);
+  double x = std::cbrt(rc) + std::sqrt(std::sqrt(effective_radius_m * std::abs(overlap_m)));
+  for (int iteration = 0; iteration < 200; ++iteration) {
+    const double step =
+        (x * x * x * x - rc * x - effective_radius_m * overlap_m) / (4.0 * x * x * x - rc);
+    x -= step;
+    if (std::abs(step) <= 1e-15 * x) {
+      break;
+    }
+  }
+  return x * x;
+}
+
+double jkr_force_n(double work_of_adhesion_j_per_m2, double effective_radius_m,
+                   double effective_youngs_modulus_pa, double contact_radius_m) {
+  const double a3 = contact_radius_m * contact_radius_m * contact_radius_m;
+  return 4.0 * effective_youngs_modulus_pa * a3 / (3.0 * effective_radius_m) -
+         std::sqrt(8.0 * kPi * work_of_adhesion_j_per_m2 * effective_youngs_modulus_pa * a3);
+}
+
+const LawRegistry& LawRegistry::builtin() {
+  static const LawRegistry registry = [] {
+    LawRegistry r;
+    register_builtin_laws(r);
+    return r;
+  }();
+  return registry;
+}
+
+void LawRegistry::add_contact_law(LawInfo<ContactLaw> info) {
+  std::string name = info.name;
+  contact_laws_.insert_or_assign(std::move(name), std::move(info));
+}
+void LawRegistry::add_bond_law(LawInfo<BondLaw> info) {
+  std::string name = info.name;
+  bond_laws_.insert_or_assign(std::move(name), std::move(info));
+}
+
+const LawInfo<ContactLaw>* LawRegistry::find_contact_law(std::string_view name) const {
+  const auto found = contact_laws_.find(name);
+  return found == contact_laws_.end() ? nullptr : &found->second;
+}
+const LawInfo<BondLaw>* LawRegistry::find_bond_law(std::string_view name) const {
+  const auto found = bond_laws_.find(name);
+  return found == bond_laws_.end() ? nullptr : &found->second;
+}
+std::vector<std::string> LawRegistry::contact_law_names() const { return keys_of(contact_laws_); }
+std::vector<std::string> LawRegistry::bond_law_names() const { return keys_of(bond_laws_); }
+
+std::unique_ptr<ContactLaw> LawRegistry::create_contact_law(std::string_view name,
+                                                            const LawParameters& parameters,
+                                                            const PairMaterial& material) const {
+  const LawInfo<ContactLaw>* info = find_contact_law(name);
+  if (info == nullptr) {
+    throw std::invalid_argument("unknown contact law '" + std::string(name) + "'");
+  }
+  return info->factory(complete_parameters(*info, parameters), material);
+}
+
+std::unique_ptr<BondLaw> LawRegistry::create_bond_law(std::string_view name,
+                                                      const LawParameters& parameters,
+                                                      const PairMaterial& material) const {
+  const LawInfo<BondLaw>* info = find_bond_law(name);
+  if (info == nullptr) {
+    throw std::invalid_argument("unknown bond law '" + std::string(name) + "'");
+  }
+  return info->factory(complete_parameters(*info, parameters), material);
+}
+
+// One line per law: adding a law is its class plus one line here.
+void register_builtin_laws(LawRegistry& registry) {
+  constexpr double kHuge = 1e308;
+  registry.add_contact_law({"hertz_mindlin",
+                            "Hertz normal, Mindlin tangential spring, eqs. 3.1-3.3 damping",
+                            {{"restitution", "-", 1e-12, 1.0, std::nullopt}},
+                            make_contact_law<HertzMindlin>});
+  registry.add_contact_law({"coulomb",
+                            "tangential force limited to mu times the normal load",
+                            {{"friction_coefficient", "-", 0.0, 100.0, std::nullopt}},
+                            make_contact_law<Coulomb>});
+  registry.add_contact_law({"jkr",
+                            "JKR adhesion from the work of adhesion",
+                            {{"surface_energy_j_per_m2", "J/m^2", 0.0, 1e3, std::nullopt}},
+                            make_contact_law<Jkr>});
+  registry.add_bond_law({"bpm",
+                         "bonded particle model, eqs. 3.4-3.5, no damping, no moments",
+                         {{"normal_stiffness_n_per_m3", "N/m^3", 1e-30, kHuge, std::nullopt},
+                          {"shear_stiffness_n_per_m3", "N/m^3", 1e-30, kHuge, std::nullopt},
+                          {"normal_strength_pa", "Pa", 0.0, kHuge, 1e300},
+                          {"shear_strength_pa", "Pa", 0.0, kHuge, 1e300},
+                          {"bonded_disk_scale", "-", 1e-6, 1e3, 1.0}},
+                         make_bond_law<BondedParticleModel>});
+}
+
+}  // namespace fl::dem

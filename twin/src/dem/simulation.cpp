@@ -1,0 +1,995 @@
+#include "fl/twin/dem/simulation.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include "fl/twin/dem/geometry.hpp"
+
+namespace fl::dem {
+namespace {
+
+constexpr std::uint32_t kNoTriangle = std::numeric_limits<std::uint32_t>::max();
+constexpr int kMeshSlots = 4;  // history slots per particle per mesh (contacts at once)
+
+struct MeshSlot {
+  std::uint32_t triangle = kNoTriangle;
+  PairState state;
+};
+
+struct CarriedContact {  // contact history carried over a neighbour-list rebuild
+  std::uint32_t i;
+  std::uint32_t j;
+  PairState state;
+};
+
+struct ThreadTally {  // per-thread sums, reduced in thread order
+  double contact_energy_j = 0.0;
+  double bond_energy_j = 0.0;
+  std::size_t touching = 0;
+  bool bond_broke = false;
+  char padding[64] = {};  // keep threads' tallies on separate cache lines
+};
+
+// Applies a permutation (new index n takes old index order[n]) using a scratch vector of the
+// same capacity, then swaps: no allocation once both have their capacity.
+template <typename T>
+void permute(std::vector<T>& values, std::vector<T>& scratch,
+             const std::vector<std::uint32_t>& order, std::size_t stride = 1) {
+  scratch.resize(values.size());
+  for (std::size_t n = 0; n < order.size(); ++n) {
+    for (std::size_t s = 0; s < stride; ++s) {
+      scratch[n * stride + s] = values[order[n] * stride + s];
+    }
+  }
+  values.swap(scratch);
+}
+
+}  // namespace
+
+struct Simulation::Impl {
+  // resolved model
+  std::size_t type_count = 0;
+  std::vector<const Interaction*> interactions;  // type pair -> interaction (contact laws)
+  std::vector<double> pair_range_m;              // adhesion range per type pair
+  int threads = 1;
+  double dt = 0.0;
+  Vec3 gravity = Vec3::Zero();
+
+  bool prepared = false;
+  bool forces_valid = false;
+  bool rebuild_requested = true;
+
+  // cell list and neighbour list (half list: j > i under i), with contact history
+  double cell_size = 0.0;
+  double skin = 0.0;
+  Eigen::Vector3i cell_dims = Eigen::Vector3i::Ones();
+  Vec3 cell_origin = Vec3::Zero();
+  std::vector<std::uint32_t> cell_start;
+  std::vector<std::uint32_t> cell_particles;
+  std::vector<std::uint32_t> particle_cell;
+  std::vector<std::uint32_t> pair_offsets;
+  std::vector<std::uint32_t> pair_j;
+  std::vector<PairState> pair_states;
+  std::vector<CarriedContact> carried;
+  std::vector<Vec3> build_position_m;
+  std::size_t rebuilds_since_sort = 0;
+
+  // bonds
+  std::vector<const BondLaw*> bond_laws;
+  std::vector<std::uint32_t> partner_offsets;  // per particle: bonded partners (CSR)
+  std::vector<std::uint32_t> partner_particle;
+  std::vector<std::uint32_t> partner_bond;
+
+  // walls: current geometry and history
+  std::vector<Vec3> plane_point_m;
+  std::vector<Vec3> plane_normal;
+  std::vector<std::vector<PairState>> plane_states;   // [plane][particle]
+  std::vector<std::vector<Triangle>> mesh_triangles;  // current pose
+  std::vector<std::vector<Eigen::AlignedBox3d>> mesh_triangle_boxes;
+  std::vector<Eigen::AlignedBox3d> mesh_boxes;
+  std::vector<std::vector<MeshSlot>> mesh_slots;      // [mesh][particle * kMeshSlots + slot]
+  std::vector<const Interaction*> wall_interactions;  // [type * wall_count + wall]
+  std::vector<double> wall_range_m;
+
+  // threads
+  std::vector<std::uint32_t> particle_begin;  // threads + 1 boundaries
+  std::vector<std::uint32_t> bond_begin;
+  std::vector<std::vector<Vec3>> force_buffers;  // threads 1.. (thread 0 writes the state)
+  std::vector<std::vector<Vec3>> torque_buffers;
+  std::vector<ThreadTally> tallies;
+
+  // scratch for re-ordering
+  std::vector<std::uint32_t> order;
+  std::vector<std::uint32_t> new_of_old;
+  std::vector<Vec3> scratch_vec3;
+  std::vector<double> scratch_double;
+  std::vector<std::uint32_t> scratch_u32;
+  std::vector<PairState> scratch_states;
+  std::vector<MeshSlot> scratch_slots;
+
+  double last_contact_energy_j = 0.0;
+  double last_bond_energy_j = 0.0;
+  std::uint32_t next_body = 0;
+  std::uint32_t next_id = 0;
+};
+
+Simulation::Simulation(std::shared_ptr<const Model> model)
+    : model_(std::move(model)), impl_(std::make_unique<Impl>()) {
+  if (!model_) {
+    throw std::invalid_argument("dem simulation: no model");
+  }
+  const ModelSpec& spec = model_->spec();
+  Impl& m = *impl_;
+  m.type_count = model_->type_count();
+  m.threads = spec.thread_count;
+  m.dt = spec.timestep_s;
+  m.gravity = spec.gravity_m_per_s2;
+  m.skin = spec.neighbor_skin_m;
+  m.interactions.resize(m.type_count * m.type_count);
+  for (std::uint32_t a = 0; a < m.type_count; ++a) {
+    for (std::uint32_t b = 0; b < m.type_count; ++b) {
+      m.interactions[a * m.type_count + b] = &model_->interaction(a, b);
+    }
+  }
+  const std::size_t wall_count = spec.planes.size() + spec.meshes.size();
+  state_.walls.resize(wall_count);
+  m.plane_point_m.resize(spec.planes.size());
+  m.plane_normal.resize(spec.planes.size());
+  m.plane_states.resize(spec.planes.size());
+  m.mesh_triangles.resize(spec.meshes.size());
+  m.mesh_triangle_boxes.resize(spec.meshes.size());
+  m.mesh_boxes.resize(spec.meshes.size());
+  m.mesh_slots.resize(spec.meshes.size());
+  for (std::size_t w = 0; w < spec.meshes.size(); ++w) {
+    m.mesh_triangles[w] = spec.meshes[w].triangles;
+    m.mesh_triangle_boxes[w].resize(spec.meshes[w].triangles.size());
+  }
+  m.wall_interactions.resize(m.type_count * wall_count);
+  for (std::uint32_t t = 0; t < m.type_count; ++t) {
+    for (std::size_t w = 0; w < wall_count; ++w) {
+      const std::uint32_t wall_type =
+          w < spec.planes.size() ? spec.planes[w].type : spec.meshes[w - spec.planes.size()].type;
+      m.wall_interactions[t * wall_count + w] = &model_->interaction(t, wall_type);
+    }
+  }
+  m.tallies.resize(static_cast<std::size_t>(m.threads));
+  m.force_buffers.resize(static_cast<std::size_t>(m.threads));
+  m.torque_buffers.resize(static_cast<std::size_t>(m.threads));
+}
+
+Simulation::~Simulation() = default;
+
+int Simulation::thread_count() const { return impl_->threads; }
+
+void Simulation::reserve(std::size_t particles, std::size_t bonds) {
+  State& s = state_;
+  s.position_m.reserve(particles);
+  s.velocity_m_per_s.reserve(particles);
+  s.angular_velocity_rad_per_s.reserve(particles);
+  s.force_n.reserve(particles);
+  s.torque_nm.reserve(particles);
+  s.radius_m.reserve(particles);
+  s.inverse_mass_per_kg.reserve(particles);
+  s.inverse_inertia_per_kg_m2.reserve(particles);
+  s.type.reserve(particles);
+  s.body.reserve(particles);
+  s.id.reserve(particles);
+  s.bonds.reserve(bonds);
+  s.bond_states.reserve(bonds);
+}
+
+std::uint32_t Simulation::add_sphere(const SphereSpec& sphere) {
+  if (sphere.type >= model_->type_count() || !(sphere.radius_m > 0.0)) {
+    throw std::invalid_argument("dem add_sphere: unknown type or radius <= 0");
+  }
+  State& s = state_;
+  const double density = model_->material_of_type(sphere.type).density_kg_per_m3;
+  const double mass =
+      density * 4.0 / 3.0 * std::numbers::pi * sphere.radius_m * sphere.radius_m * sphere.radius_m;
+  s.position_m.push_back(sphere.position_m);
+  s.velocity_m_per_s.push_back(sphere.velocity_m_per_s);
+  s.angular_velocity_rad_per_s.push_back(sphere.angular_velocity_rad_per_s);
+  s.force_n.push_back(Vec3::Zero());
+  s.torque_nm.push_back(Vec3::Zero());
+  s.radius_m.push_back(sphere.radius_m);
+  s.inverse_mass_per_kg.push_back(1.0 / mass);
+  s.inverse_inertia_per_kg_m2.push_back(1.0 / (0.4 * mass * sphere.radius_m * sphere.radius_m));
+  s.type.push_back(sphere.type);
+  s.body.push_back(impl_->next_body++);
+  s.id.push_back(impl_->next_id++);
+  impl_->prepared = false;
+  return static_cast<std::uint32_t>(s.size() - 1);
+}
+
+std::uint32_t Simulation::add_body(std::span<const Vec3> positions_m,
+                                   std::span<const double> radii_m,
+                                   std::span<const std::uint8_t> types,
+                                   std::span<const BodyBond> bonds, const BodyPose& pose) {
+  if (positions_m.size() != radii_m.size() || positions_m.size() != types.size()) {
+    throw std::invalid_argument("dem add_body: positions, radii and types differ in length");
+  }
+  const auto first = static_cast<std::uint32_t>(state_.size());
+  const std::uint32_t body = impl_->next_body;
+  const Eigen::Matrix3d rotation = pose.orientation.normalized().toRotationMatrix();
+  for (std::size_t k = 0; k < positions_m.size(); ++k) {
+    const Vec3 arm = rotation * positions_m[k];
+    SphereSpec sphere;
+    sphere.position_m = pose.position_m + arm;
+    sphere.radius_m = radii_m[k];
+    sphere.type = types[k];
+    sphere.velocity_m_per_s = pose.velocity_m_per_s + pose.angular_velocity_rad_per_s.cross(arm);
+    sphere.angular_velocity_rad_per_s = pose.angular_velocity_rad_per_s;
+    add_sphere(sphere);
+    state_.body.back() = body;
+  }
+  impl_->next_body = body + 1;
+  for (const BodyBond& bond : bonds) {
+    if (bond.i >= positions_m.size() || bond.j >= positions_m.size() || bond.i == bond.j) {
+      throw std::invalid_argument("dem add_body: bond index out of range");
+    }
+    Bond b;
+    b.i = first + bond.i;
+    b.j = first + bond.j;
+    b.rest_length_m = (state_.position_m[b.i] - state_.position_m[b.j]).norm();
+    b.bond_radius_m = std::min(state_.radius_m[b.i], state_.radius_m[b.j]);
+    b.break_distance_m = 2.0 * bond.contact_radius_m;
+    if (model_->interaction(state_.type[b.i], state_.type[b.j]).bond_law == nullptr) {
+      throw std::invalid_argument("dem add_body: no bond law for the types of a bond");
+    }
+    state_.bonds.push_back(b);
+    state_.bond_states.emplace_back();
+  }
+  return body;
+}
+
+WallState& Simulation::wall(std::string_view name) {
+  const ModelSpec& spec = model_->spec();
+  for (std::size_t w = 0; w < spec.planes.size(); ++w) {
+    if (spec.planes[w].name == name) return state_.walls[w];
+  }
+  for (std::size_t w = 0; w < spec.meshes.size(); ++w) {
+    if (spec.meshes[w].name == name) return state_.walls[spec.planes.size() + w];
+  }
+  throw std::invalid_argument("dem: no wall named '" + std::string(name) + "'");
+}
+
+// ------------------------------------------------------------------------------------ setup
+
+void Simulation::prepare() {
+  Impl& m = *impl_;
+  State& s = state_;
+  const std::size_t n = s.size();
+  const ModelSpec& spec = model_->spec();
+  double max_radius = 0.0;
+  for (const double r : s.radius_m) max_radius = std::max(max_radius, r);
+  if (max_radius == 0.0) max_radius = 0.004;
+  const double range = model_->max_range_m(max_radius);
+  m.cell_size = 2.0 * max_radius + range + m.skin;
+  const Vec3 extent = spec.domain.upper_m - spec.domain.lower_m;
+  for (;;) {
+    for (int d = 0; d < 3; ++d) {
+      m.cell_dims[d] = std::max(1, static_cast<int>(std::floor(extent[d] / m.cell_size)));
+    }
+    const double cells = static_cast<double>(m.cell_dims.cast<double>().prod());
+    if (cells <= 8.0 * static_cast<double>(n) + 4096.0) break;
+    m.cell_size *= 1.25;  // sparse system in a large domain: fewer, larger cells
+  }
+  m.cell_origin = spec.domain.lower_m;
+  m.cell_start.assign(static_cast<std::size_t>(m.cell_dims.prod()) + 1, 0);
+
+  m.pair_range_m.assign(m.type_count * m.type_count, 0.0);
+  for (std::size_t k = 0; k < m.pair_range_m.size(); ++k) {
+    for (const auto& law : m.interactions[k]->contact_laws) {
+      m.pair_range_m[k] = std::max(m.pair_range_m[k], law->range_m(max_radius));
+    }
+  }
+  const std::size_t wall_count = spec.planes.size() + spec.meshes.size();
+  m.wall_range_m.assign(m.wall_interactions.size(), 0.0);
+  for (std::size_t k = 0; k < m.wall_interactions.size(); ++k) {
+    for (const auto& law : m.wall_interactions[k]->contact_laws) {
+      m.wall_range_m[k] = std::max(m.wall_range_m[k], law->range_m(max_radius));
+    }
+  }
+  (void)wall_count;
+
+  for (auto& states : m.plane_states) states.resize(n);
+  for (auto& slots : m.mesh_slots) slots.resize(n * kMeshSlots);
+  const std::size_t threads = static_cast<std::size_t>(m.threads);
+  for (std::size_t t = 1; t < threads; ++t) {
+    m.force_buffers[t].resize(n);
+    m.torque_buffers[t].resize(n);
+  }
+  m.build_position_m.resize(n);
+  m.particle_cell.resize(n);
+  m.cell_particles.resize(n);
+  m.order.resize(n);
+  m.new_of_old.resize(n);
+  m.scratch_vec3.reserve(n);
+  m.scratch_double.reserve(n);
+  m.scratch_u32.reserve(n);
+  m.scratch_states.reserve(std::max(n, m.pair_states.capacity()));
+  m.scratch_slots.reserve(n * kMeshSlots);
+  const std::uint32_t listed = m.pair_offsets.empty() ? 0U : m.pair_offsets.back();
+  m.pair_offsets.resize(n + 1, listed);  // new particles: empty lists until the rebuild
+
+  m.bond_laws.resize(s.bonds.size());
+  for (std::size_t k = 0; k < s.bonds.size(); ++k) {
+    m.bond_laws[k] = model_->interaction(s.type[s.bonds[k].i], s.type[s.bonds[k].j]).bond_law.get();
+  }
+  m.bond_begin.resize(threads + 1);
+  for (std::size_t t = 0; t <= threads; ++t) {
+    m.bond_begin[t] = static_cast<std::uint32_t>(s.bonds.size() * t / threads);
+  }
+  m.particle_begin.assign(threads + 1, static_cast<std::uint32_t>(n));
+  m.particle_begin[0] = 0;
+
+  update_wall_geometry();
+  m.prepared = true;
+  m.rebuild_requested = true;
+  rebuild_neighbors();
+  if (!m.forces_valid) {
+    compute_forces();  // velocity Verlet needs F(t0); later additions start from zero force
+    m.forces_valid = true;
+  }
+}
+
+void Simulation::update_wall_geometry() {
+  const ModelSpec& spec = model_->spec();
+  const State& state = state_;
+  Impl& m = *impl_;
+  for (std::size_t w = 0; w < spec.planes.size(); ++w) {
+    const WallState& ws = state.walls[w];
+    m.plane_normal[w] = (ws.rotation * spec.planes[w].normal).normalized();
+    m.plane_point_m[w] =
+        ws.rotation * (spec.planes[w].point_m - ws.pivot_m) + ws.pivot_m + ws.translation_m;
+  }
+  for (std::size_t w = 0; w < spec.meshes.size(); ++w) {
+    const WallState& ws = state.walls[spec.planes.size() + w];
+    const auto& reference = spec.meshes[w].triangles;
+    auto& current = m.mesh_triangles[w];
+    auto& boxes = m.mesh_triangle_boxes[w];
+    Eigen::AlignedBox3d all;
+    const Eigen::Matrix3d rotation = ws.rotation.toRotationMatrix();
+    for (std::size_t k = 0; k < reference.size(); ++k) {
+      boxes[k].setEmpty();
+      for (int v = 0; v < 3; ++v) {
+        current[k].vertices_m[v] =
+            rotation * (reference[k].vertices_m[v] - ws.pivot_m) + ws.pivot_m + ws.translation_m;
+        boxes[k].extend(current[k].vertices_m[v]);
+      }
+      all.extend(boxes[k]);
+    }
+    m.mesh_boxes[w] = all;
+  }
+}
+
+// --------------------------------------------------------------------- neighbour search
+
+namespace {
+
+inline std::uint32_t cell_coordinate(double x, double origin, double size, int dims) {
+  const double c = std::floor((x - origin) / size);
+  if (!(c > 0.0)) return 0;  // also NaN
+  if (c >= static_cast<double>(dims - 1)) return static_cast<std::uint32_t>(dims - 1);
+  return static_cast<std::uint32_t>(c);
+}
+
+}  // namespace
+
+void Simulation::sort_particles() {
+  Impl& m = *impl_;
+  State& s = state_;
+  const std::size_t n = s.size();
+  // m.order holds old indices in cell order (from the binning in rebuild_neighbors)
+  for (std::size_t k = 0; k < n; ++k) m.new_of_old[m.order[k]] = static_cast<std::uint32_t>(k);
+  permute(s.position_m, m.scratch_vec3, m.order);
+  permute(s.velocity_m_per_s, m.scratch_vec3, m.order);
+  permute(s.angular_velocity_rad_per_s, m.scratch_vec3, m.order);
+  permute(s.force_n, m.scratch_vec3, m.order);
+  permute(s.torque_nm, m.scratch_vec3, m.order);
+  permute(m.build_position_m, m.scratch_vec3, m.order);
+  permute(s.radius_m, m.scratch_double, m.order);
+  permute(s.inverse_mass_per_kg, m.scratch_double, m.order);
+  permute(s.inverse_inertia_per_kg_m2, m.scratch_double, m.order);
+  permute(s.type, m.scratch_u32, m.order);
+  permute(s.body, m.scratch_u32, m.order);
+  permute(s.id, m.scratch_u32, m.order);
+  permute(m.particle_cell, m.scratch_u32, m.order);
+  for (auto& states : m.plane_states) permute(states, m.scratch_states, m.order);
+  for (auto& slots : m.mesh_slots) permute(slots, m.scratch_slots, m.order, kMeshSlots);
+  for (Bond& bond : s.bonds) {
+    bond.i = m.new_of_old[bond.i];
+    bond.j = m.new_of_old[bond.j];
+  }
+  for (CarriedContact& c : m.carried) {
+    c.i = m.new_of_old[c.i];
+    c.j = m.new_of_old[c.j];
+  }
+  ++stats_.particle_sorts;
+}
+
+void Simulation::rebuild_neighbors() {
+  Impl& m = *impl_;
+  State& s = state_;
+  const std::size_t n = s.size();
+  const std::size_t capacity_before = m.pair_j.capacity() + m.pair_states.capacity();
+
+  // 1. history of active pairs, to carry into the new list
+  m.carried.clear();
+  if (m.pair_offsets.size() == n + 1 && !m.pair_states.empty()) {
+    for (std::uint32_t i = 0; i + 1 < m.pair_offsets.size(); ++i) {
+      for (std::uint32_t k = m.pair_offsets[i]; k < m.pair_offsets[i + 1]; ++k) {
+        if (m.pair_states[k].active()) m.carried.push_back({i, m.pair_j[k], m.pair_states[k]});
+      }
+    }
+  }
+
+  // 2. bin particles (counting sort by cell)
+  const std::size_t cells = m.cell_start.size() - 1;
+  std::fill(m.cell_start.begin(), m.cell_start.end(), 0U);
+  for (std::size_t k = 0; k < n; ++k) {
+    const Vec3& x = s.position_m[k];
+    const std::uint32_t cx =
+        cell_coordinate(x.x(), m.cell_origin.x(), m.cell_size, m.cell_dims.x());
+    const std::uint32_t cy =
+        cell_coordinate(x.y(), m.cell_origin.y(), m.cell_size, m.cell_dims.y());
+    const std::uint32_t cz =
+        cell_coordinate(x.z(), m.cell_origin.z(), m.cell_size, m.cell_dims.z());
+    const std::uint32_t cell = (cz * static_cast<std::uint32_t>(m.cell_dims.y()) + cy) *
+                                   static_cast<std::uint32_t>(m.cell_dims.x()) +
+                               cx;
+    m.particle_cell[k] = cell;
+    ++m.cell_start[cell + 1];
+  }
+  for (std::size_t c = 0; c < cells; ++c) m.cell_start[c + 1] += m.cell_start[c];
+  for (std::size_t k = 0; k < n; ++k)
+    m.order[m.cell_start[m.particle_cell[k]]++] = static_cast<std::uint32_t>(k);
+  for (std::size_t c = cells; c > 0; --c) m.cell_start[c] = m.cell_start[c - 1];
+  m.cell_start[0] = 0;
+
+  // 3. re-order particles by cell every few rebuilds (cache locality)
+  const int sort_every = model_->spec().sort_every_rebuilds;
+  if (sort_every > 0 && (m.rebuilds_since_sort++ % static_cast<std::size_t>(sort_every)) == 0 &&
+      n > 0) {
+    sort_particles();
+    for (std::size_t k = 0; k < n; ++k) m.cell_particles[k] = static_cast<std::uint32_t>(k);
+  } else {
+    std::copy(m.order.begin(), m.order.begin() + static_cast<std::ptrdiff_t>(n),
+              m.cell_particles.begin());
+  }
+
+  // 4. bonded partners (pairs excluded from contact unless configured)
+  m.partner_offsets.assign(n + 1, 0);
+  for (std::size_t k = 0; k < s.bonds.size(); ++k) {
+    if (s.bond_states[k].broken) continue;
+    ++m.partner_offsets[s.bonds[k].i + 1];
+    ++m.partner_offsets[s.bonds[k].j + 1];
+  }
+  for (std::size_t k = 0; k < n; ++k) m.partner_offsets[k + 1] += m.partner_offsets[k];
+  m.partner_particle.resize(m.partner_offsets[n]);
+  m.partner_bond.resize(m.partner_offsets[n]);
+  {
+    m.scratch_u32.assign(m.partner_offsets.begin(), m.partner_offsets.end() - 1);
+    for (std::size_t k = 0; k < s.bonds.size(); ++k) {
+      if (s.bond_states[k].broken) continue;
+      const Bond& b = s.bonds[k];
+      m.partner_particle[m.scratch_u32[b.i]] = b.j;
+      m.partner_bond[m.scratch_u32[b.i]++] = static_cast<std::uint32_t>(k);
+      m.partner_particle[m.scratch_u32[b.j]] = b.i;
+      m.partner_bond[m.scratch_u32[b.j]++] = static_cast<std::uint32_t>(k);
+    }
+  }
+
+  // 5. half neighbour list from the 27 surrounding cells
+  std::sort(m.carried.begin(), m.carried.end(),
+            [](const CarriedContact& a, const CarriedContact& b) {
+              return a.i != b.i ? a.i < b.i : a.j < b.j;
+            });
+  for (CarriedContact& c : m.carried) {  // re-ordering may have swapped a pair's order
+    if (c.i > c.j) {
+      std::swap(c.i, c.j);
+      c.state.tangential_displacement_m = -c.state.tangential_displacement_m;
+    }
+  }
+  std::sort(m.carried.begin(), m.carried.end(),
+            [](const CarriedContact& a, const CarriedContact& b) {
+              return a.i != b.i ? a.i < b.i : a.j < b.j;
+            });
+  m.pair_j.clear();
+  m.pair_states.clear();
+  m.pair_offsets.resize(n + 1);
+  std::size_t carried_next = 0;
+  const int dx = m.cell_dims.x();
+  const int dy = m.cell_dims.y();
+  const int dz = m.cell_dims.z();
+  for (std::uint32_t i = 0; i < n; ++i) {
+    m.pair_offsets[i] = static_cast<std::uint32_t>(m.pair_j.size());
+    const Vec3 xi = s.position_m[i];
+    const double ri = s.radius_m[i];
+    const std::uint32_t ti = s.type[i];
+    const int cell = static_cast<int>(m.particle_cell[i]);
+    const int cx = cell % dx;
+    const int cy = (cell / dx) % dy;
+    const int cz = cell / (dx * dy);
+    for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, dz - 1); ++z) {
+      for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, dy - 1); ++y) {
+        const int row = (z * dy + y) * dx;
+        const auto begin = m.cell_start[static_cast<std::size_t>(row + std::max(cx - 1, 0))];
+        const auto end = m.cell_start[static_cast<std::size_t>(row + std::min(cx + 1, dx - 1)) + 1];
+        for (std::uint32_t c = begin; c < end; ++c) {
+          const std::uint32_t j = m.cell_particles[c];
+          if (j <= i) continue;
+          const std::size_t pair_type = ti * m.type_count + s.type[j];
+          const Interaction& interaction = *m.interactions[pair_type];
+          if (!interaction.has_contact()) continue;
+          const double reach = ri + s.radius_m[j] + m.pair_range_m[pair_type] + m.skin;
+          if ((xi - s.position_m[j]).squaredNorm() >= reach * reach) continue;
+          if (!interaction.contact_between_bonded) {
+            bool bonded = false;
+            for (std::uint32_t p = m.partner_offsets[i]; p < m.partner_offsets[i + 1]; ++p) {
+              bonded = bonded || m.partner_particle[p] == j;
+            }
+            if (bonded) continue;
+          }
+          m.pair_j.push_back(j);
+        }
+      }
+    }
+    // sorted segment: deterministic order and merge with the carried history
+    const auto segment_begin = m.pair_j.begin() + m.pair_offsets[i];
+    std::sort(segment_begin, m.pair_j.end());
+    for (auto it = segment_begin; it != m.pair_j.end(); ++it) {
+      PairState state;
+      while (carried_next < m.carried.size() &&
+             (m.carried[carried_next].i < i ||
+              (m.carried[carried_next].i == i && m.carried[carried_next].j < *it))) {
+        ++carried_next;  // out of reach: history ends
+      }
+      if (carried_next < m.carried.size() && m.carried[carried_next].i == i &&
+          m.carried[carried_next].j == *it) {
+        state = m.carried[carried_next++].state;
+      }
+      m.pair_states.push_back(state);
+    }
+  }
+  m.pair_offsets[n] = static_cast<std::uint32_t>(m.pair_j.size());
+  std::copy(s.position_m.begin(), s.position_m.end(), m.build_position_m.begin());
+
+  // 6. thread ranges balanced by pair count (plus a share per particle for walls)
+  const std::size_t threads = static_cast<std::size_t>(m.threads);
+  const double total = static_cast<double>(m.pair_j.size()) + 2.0 * static_cast<double>(n);
+  std::uint32_t i = 0;
+  m.particle_begin[0] = 0;
+  for (std::size_t t = 1; t < threads; ++t) {
+    const double target = total * static_cast<double>(t) / static_cast<double>(threads);
+    while (i < n && static_cast<double>(m.pair_offsets[i]) + 2.0 * static_cast<double>(i) < target)
+      ++i;
+    m.particle_begin[t] = i;
+  }
+  m.particle_begin[threads] = static_cast<std::uint32_t>(n);
+
+  if (m.prepared && m.forces_valid &&
+      m.pair_j.capacity() + m.pair_states.capacity() != capacity_before) {
+    ++stats_.neighbor_capacity_growths;
+  }
+  stats_.neighbor_pairs = m.pair_j.size();
+  ++stats_.neighbor_rebuilds;
+  m.rebuild_requested = false;
+}
+
+// --------------------------------------------------------------------------------- forces
+
+void Simulation::compute_forces() {
+  Impl& m = *impl_;
+  State& s = state_;
+  const ModelSpec& spec = model_->spec();
+  const std::size_t n = s.size();
+  const std::size_t planes = spec.planes.size();
+  const std::size_t meshes = spec.meshes.size();
+  const std::size_t wall_count = planes + meshes;
+  const double dt = m.dt;
+
+#pragma omp parallel num_threads(m.threads)
+  {
+    const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    Vec3* force = t == 0 ? s.force_n.data() : m.force_buffers[t].data();
+    Vec3* torque = t == 0 ? s.torque_nm.data() : m.torque_buffers[t].data();
+    std::fill(force, force + n, Vec3::Zero());
+    std::fill(torque, torque + n, Vec3::Zero());
+    ThreadTally tally;
+    const Vec3* x = s.position_m.data();
+    const Vec3* v = s.velocity_m_per_s.data();
+    const Vec3* w = s.angular_velocity_rad_per_s.data();
+    const double* radius = s.radius_m.data();
+    const double* inv_mass = s.inverse_mass_per_kg.data();
+    const std::uint32_t* type = s.type.data();
+    const std::uint32_t i_begin = m.particle_begin[t];
+    const std::uint32_t i_end = m.particle_begin[t + 1];
+
+    // sphere-sphere contacts
+    for (std::uint32_t i = i_begin; i < i_end; ++i) {
+      const Vec3 xi = x[i];
+      const Vec3 vi = v[i];
+      const Vec3 wi = w[i];
+      const double ri = radius[i];
+      const double inv_mi = inv_mass[i];
+      const std::size_t type_row = type[i] * m.type_count;
+      Vec3 force_i = Vec3::Zero();
+      Vec3 torque_i = Vec3::Zero();
+      for (std::uint32_t k = m.pair_offsets[i]; k < m.pair_offsets[i + 1]; ++k) {
+        const std::uint32_t j = m.pair_j[k];
+        const std::size_t pair_type = type_row + type[j];
+        const Vec3 d = xi - x[j];
+        const double rj = radius[j];
+        const double radius_sum = ri + rj;
+        const double reach = radius_sum + m.pair_range_m[pair_type];
+        const double distance_squared = d.squaredNorm();
+        PairState& pair_state = m.pair_states[k];
+        if (distance_squared >= reach * reach) {
+          if (pair_state.flags != 0 || pair_state.tangential_displacement_m.x() != 0.0 ||
+              pair_state.tangential_displacement_m.y() != 0.0 ||
+              pair_state.tangential_displacement_m.z() != 0.0) {
+            pair_state.reset();
+          }
+          continue;
+        }
+        const double distance = std::sqrt(distance_squared);
+        PairGeometry g;
+        g.normal = d / distance;
+        g.overlap_m = radius_sum - distance;
+        g.relative_velocity_m_per_s = vi - v[j] - (ri * wi + rj * w[j]).cross(g.normal);
+        g.effective_radius_m = ri * rj / radius_sum;
+        g.effective_mass_kg = 1.0 / (inv_mi + inv_mass[j]);
+        g.timestep_s = dt;
+        ForceAccumulator acc;
+        for (const auto& law : m.interactions[pair_type]->contact_laws) {
+          law->compute(g, pair_state, acc);
+        }
+        if (!acc.touching) continue;
+        const Vec3 tangential = acc.tangential_elastic_force_n + acc.tangential_damping_force_n;
+        const Vec3 f = (acc.normal_force_n + acc.normal_damping_force_n) * g.normal + tangential;
+        const Vec3 t_cross_n = tangential.cross(g.normal);
+        force_i += f;
+        force[j] -= f;
+        torque_i += ri * t_cross_n + acc.torque_on_i_nm;
+        torque[j] += rj * t_cross_n + acc.torque_on_j_nm;
+        tally.contact_energy_j += acc.elastic_energy_j;
+        ++tally.touching;
+      }
+      force[i] += force_i;
+      torque[i] += torque_i;
+    }
+
+    // bonds
+    for (std::uint32_t k = m.bond_begin[t]; k < m.bond_begin[t + 1]; ++k) {
+      BondState& bond_state = s.bond_states[k];
+      if (bond_state.broken) continue;
+      const Bond& bond = s.bonds[k];
+      const std::uint32_t i = bond.i;
+      const std::uint32_t j = bond.j;
+      const Vec3 d = x[i] - x[j];
+      BondGeometry g;
+      g.distance_m = d.norm();
+      g.normal = d / g.distance_m;
+      const double ri = radius[i];
+      const double rj = radius[j];
+      const double arm_i = g.distance_m * ri / (ri + rj);  // bond point between the centres
+      const double arm_j = g.distance_m - arm_i;
+      g.relative_velocity_m_per_s = v[i] - v[j] - (arm_i * w[i] + arm_j * w[j]).cross(g.normal);
+      g.rest_length_m = bond.rest_length_m;
+      g.bond_radius_m = bond.bond_radius_m;
+      g.break_distance_m = bond.break_distance_m;
+      g.timestep_s = dt;
+      BondForce bf;
+      m.bond_laws[k]->compute(g, bond_state, bf);
+      if (bond_state.broken) {
+        tally.bond_broke = true;
+        continue;
+      }
+      const Vec3 f = bf.normal_force_n * g.normal + bf.shear_force_n;
+      const Vec3 t_cross_n = bf.shear_force_n.cross(g.normal);
+      force[i] += f;
+      force[j] -= f;
+      torque[i] += arm_i * t_cross_n + bf.torque_on_i_nm;
+      torque[j] += arm_j * t_cross_n + bf.torque_on_j_nm;
+      tally.bond_energy_j += bf.elastic_energy_j;
+    }
+
+    // walls
+    if (wall_count > 0) {
+      std::array<std::uint32_t, 16> candidate_triangle{};
+      std::array<ClosestPoint, 16> candidate_point{};
+      for (std::uint32_t i = i_begin; i < i_end; ++i) {
+        const Vec3 xi = x[i];
+        const double ri = radius[i];
+        const std::size_t wall_row = type[i] * wall_count;
+        auto apply = [&](std::size_t wall, const Vec3& normal, double overlap, const Vec3& point,
+                         PairState& pair_state) {
+          const WallState& ws = s.walls[wall];
+          const Vec3 moved_pivot = ws.pivot_m + ws.translation_m;
+          const Vec3 surface =
+              ws.surface_velocity_m_per_s - ws.surface_velocity_m_per_s.dot(normal) * normal;
+          const Vec3 wall_velocity = ws.linear_velocity_m_per_s +
+                                     ws.angular_velocity_rad_per_s.cross(point - moved_pivot) +
+                                     surface;
+          PairGeometry g;
+          g.normal = normal;
+          g.overlap_m = overlap;
+          g.relative_velocity_m_per_s = v[i] - (ri * w[i]).cross(normal) - wall_velocity;
+          g.effective_radius_m = ri;
+          g.effective_mass_kg = 1.0 / inv_mass[i];
+          g.timestep_s = dt;
+          ForceAccumulator acc;
+          for (const auto& law : m.wall_interactions[wall_row + wall]->contact_laws) {
+            law->compute(g, pair_state, acc);
+          }
+          if (!acc.touching) return;
+          const Vec3 tangential = acc.tangential_elastic_force_n + acc.tangential_damping_force_n;
+          force[i] += (acc.normal_force_n + acc.normal_damping_force_n) * normal + tangential;
+          torque[i] += ri * tangential.cross(normal) + acc.torque_on_i_nm;
+          tally.contact_energy_j += acc.elastic_energy_j;
+        };
+        for (std::size_t p = 0; p < planes; ++p) {
+          const double gap = (xi - m.plane_point_m[p]).dot(m.plane_normal[p]);
+          const double overlap = ri - gap;
+          PairState& pair_state = m.plane_states[p][i];
+          if (overlap <= -m.wall_range_m[wall_row + p]) {
+            if (pair_state.flags != 0 || !pair_state.tangential_displacement_m.isZero(0.0)) {
+              pair_state.reset();
+            }
+            continue;
+          }
+          apply(p, m.plane_normal[p], overlap, xi - gap * m.plane_normal[p], pair_state);
+        }
+        for (std::size_t mesh = 0; mesh < meshes; ++mesh) {
+          const std::size_t wall = planes + mesh;
+          const double reach = ri + m.wall_range_m[wall_row + wall];
+          MeshSlot* slots = &m.mesh_slots[mesh][i * kMeshSlots];
+          int candidates = 0;
+          if (m.mesh_boxes[mesh].exteriorDistance(xi) < reach) {
+            const auto& triangles = m.mesh_triangles[mesh];
+            const auto& boxes = m.mesh_triangle_boxes[mesh];
+            for (std::size_t tri = 0; tri < triangles.size() && candidates < 16; ++tri) {
+              if (boxes[tri].exteriorDistance(xi) >= reach) continue;
+              const auto& vertices = triangles[tri].vertices_m;
+              const ClosestPoint cp =
+                  closest_point_on_triangle(xi, vertices[0], vertices[1], vertices[2]);
+              if ((xi - cp.point_m).squaredNorm() >= reach * reach) continue;
+              candidate_triangle[static_cast<std::size_t>(candidates)] =
+                  static_cast<std::uint32_t>(tri);
+              candidate_point[static_cast<std::size_t>(candidates)] = cp;
+              ++candidates;
+            }
+          }
+          // A face contact makes edge/vertex contacts of neighbouring triangles redundant;
+          // without one, an edge or vertex shared by several triangles counts once.
+          bool any_face = false;
+          for (int c = 0; c < candidates; ++c) {
+            any_face = any_face || candidate_point[static_cast<std::size_t>(c)].feature ==
+                                       TriangleFeature::kFace;
+          }
+          std::array<int, kMeshSlots> kept_candidate{};
+          int kept = 0;
+          for (int c = 0; c < candidates && kept < kMeshSlots; ++c) {
+            const ClosestPoint& cp = candidate_point[static_cast<std::size_t>(c)];
+            if (any_face && cp.feature != TriangleFeature::kFace) continue;
+            bool duplicate = false;
+            for (int e = 0; e < kept && !any_face; ++e) {
+              const auto& other = candidate_point[static_cast<std::size_t>(
+                  kept_candidate[static_cast<std::size_t>(e)])];
+              duplicate = duplicate || (other.point_m - cp.point_m).squaredNorm() < 1e-18;
+            }
+            if (!duplicate) kept_candidate[static_cast<std::size_t>(kept++)] = c;
+          }
+          for (int q = 0; q < kMeshSlots; ++q) {  // history ends for triangles left
+            bool still = false;
+            for (int e = 0; e < kept; ++e) {
+              still =
+                  still || candidate_triangle[static_cast<std::size_t>(
+                               kept_candidate[static_cast<std::size_t>(e)])] == slots[q].triangle;
+            }
+            if (!still) slots[q] = MeshSlot{};
+          }
+          for (int e = 0; e < kept; ++e) {
+            const auto c = static_cast<std::size_t>(kept_candidate[static_cast<std::size_t>(e)]);
+            const ClosestPoint& cp = candidate_point[c];
+            const std::uint32_t tri = candidate_triangle[c];
+            int slot = -1;
+            for (int q = 0; q < kMeshSlots && slot < 0; ++q) {
+              if (slots[q].triangle == tri) slot = q;
+            }
+            for (int q = 0; q < kMeshSlots && slot < 0; ++q) {
+              if (slots[q].triangle == kNoTriangle) slot = q;
+            }
+            slots[slot].triangle = tri;
+            const Vec3 offset = xi - cp.point_m;
+            const double distance = offset.norm();
+            if (distance == 0.0) continue;  // centre on the surface: no defined normal
+            apply(wall, offset / distance, ri - distance, cp.point_m, slots[slot].state);
+          }
+        }
+      }
+    }
+    m.tallies[t] = tally;
+
+#pragma omp barrier
+    if (m.threads > 1) {
+      for (std::uint32_t k = i_begin; k < i_end; ++k) {
+        for (std::size_t b = 1; b < static_cast<std::size_t>(m.threads); ++b) {
+          s.force_n[k] += m.force_buffers[b][k];
+          s.torque_nm[k] += m.torque_buffers[b][k];
+        }
+      }
+    }
+  }
+
+  double contact_energy = 0.0;
+  double bond_energy = 0.0;
+  std::size_t touching = 0;
+  bool broke = false;
+  for (const ThreadTally& tally : m.tallies) {
+    contact_energy += tally.contact_energy_j;
+    bond_energy += tally.bond_energy_j;
+    touching += tally.touching;
+    broke = broke || tally.bond_broke;
+  }
+  m.last_contact_energy_j = contact_energy;
+  m.last_bond_energy_j = bond_energy;
+  stats_.touching_pairs = touching;
+  if (broke) {
+    m.rebuild_requested = true;  // the freed pair may touch: list it for contact
+    std::size_t count = 0;
+    for (const BondState& b : s.bond_states) count += b.broken ? 1 : 0;
+    stats_.broken_bonds = count;
+  }
+}
+
+// ---------------------------------------------------------------------------------- step
+
+void Simulation::step(std::size_t count) {
+  Impl& m = *impl_;
+  if (!m.prepared) prepare();
+  State& s = state_;
+  const ModelSpec& spec = model_->spec();
+  const std::size_t n = s.size();
+  const double dt = m.dt;
+  const double half_dt = 0.5 * dt;
+  const Vec3 gravity = m.gravity;
+  const double trigger = 0.25 * m.skin * m.skin;  // (skin / 2)^2
+  bool walls_move = false;
+  for (const WallState& w : s.walls) {
+    walls_move = walls_move || !w.linear_velocity_m_per_s.isZero(0.0) ||
+                 !w.angular_velocity_rad_per_s.isZero(0.0);
+  }
+
+  for (std::size_t iteration = 0; iteration < count; ++iteration) {
+    bool rebuild = m.rebuild_requested;
+#pragma omp parallel num_threads(m.threads) reduction(|| : rebuild)
+    {
+      const auto t = static_cast<std::size_t>(omp_get_thread_num());
+      const std::uint32_t begin = m.particle_begin[t];
+      const std::uint32_t end = m.particle_begin[t + 1];
+      for (std::uint32_t k = begin; k < end; ++k) {
+        s.velocity_m_per_s[k] += half_dt * (s.force_n[k] * s.inverse_mass_per_kg[k] + gravity);
+        s.angular_velocity_rad_per_s[k] +=
+            half_dt * s.inverse_inertia_per_kg_m2[k] * s.torque_nm[k];
+        s.position_m[k] += dt * s.velocity_m_per_s[k];
+        rebuild = rebuild || (s.position_m[k] - m.build_position_m[k]).squaredNorm() > trigger;
+      }
+    }
+    if (walls_move) {
+      for (WallState& w : s.walls) {
+        w.translation_m += dt * w.linear_velocity_m_per_s;
+        const double angle = w.angular_velocity_rad_per_s.norm() * dt;
+        if (angle > 0.0) {
+          w.rotation = Eigen::Quaterniond(
+                           Eigen::AngleAxisd(angle, w.angular_velocity_rad_per_s.normalized())) *
+                       w.rotation;
+          w.rotation.normalize();
+        }
+      }
+      update_wall_geometry();
+      // A moving mesh may approach particles faster than the skin allows for: fine here since
+      // wall contacts are found every step without a list.
+    }
+    if (rebuild) rebuild_neighbors();
+    compute_forces();
+#pragma omp parallel for num_threads(m.threads) schedule(static)
+    for (std::size_t k = 0; k < n; ++k) {
+      s.velocity_m_per_s[k] += half_dt * (s.force_n[k] * s.inverse_mass_per_kg[k] + gravity);
+      s.angular_velocity_rad_per_s[k] += half_dt * s.inverse_inertia_per_kg_m2[k] * s.torque_nm[k];
+    }
+    s.time_s += dt;
+    ++s.step;
+  }
+  (void)spec;
+}
+
+// ------------------------------------------------------------------------------- reports
+
+EnergyReport Simulation::energy() const {
+  const State& s = state_;
+  EnergyReport report;
+  const Vec3 gravity = impl_->gravity;
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    const double mass = 1.0 / s.inverse_mass_per_kg[k];
+    report.kinetic_translational_j += 0.5 * mass * s.velocity_m_per_s[k].squaredNorm();
+    report.kinetic_rotational_j +=
+        0.5 * s.angular_velocity_rad_per_s[k].squaredNorm() / s.inverse_inertia_per_kg_m2[k];
+    report.gravitational_j -= mass * gravity.dot(s.position_m[k]);
+  }
+  report.contact_elastic_j = impl_->last_contact_energy_j;
+  report.bond_elastic_j = impl_->last_bond_energy_j;
+  return report;
+}
+
+TimestepReport Simulation::check_timestep() const {
+  const State& s = state_;
+  TimestepReport report;
+  report.timestep_s = impl_->dt;
+  report.rayleigh_time_s = std::numeric_limits<double>::infinity();
+  report.bond_critical_step_s = std::numeric_limits<double>::infinity();
+  report.contact_critical_step_s = std::numeric_limits<double>::infinity();
+  std::vector<double> bond_stiffness(s.size(), 0.0);
+  for (std::size_t k = 0; k < s.bonds.size(); ++k) {
+    if (s.bond_states[k].broken) continue;
+    const Bond& b = s.bonds[k];
+    const BondLaw& law = *model_->interaction(s.type[b.i], s.type[b.j]).bond_law;
+    const double stiffness = std::max(law.normal_stiffness_n_per_m(b.bond_radius_m),
+                                      law.shear_stiffness_n_per_m(b.bond_radius_m));
+    bond_stiffness[b.i] += stiffness;
+    bond_stiffness[b.j] += stiffness;
+  }
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    const Material& material = model_->material_of_type(s.type[k]);
+    report.rayleigh_time_s =
+        std::min(report.rayleigh_time_s,
+                 rayleigh_time_s(s.radius_m[k], material.density_kg_per_m3,
+                                 material.youngs_modulus_pa, material.poisson_ratio));
+    if (bond_stiffness[k] > 0.0) {
+      // a particle held by all its bonds, neighbours fixed: omega^2 = sum k / m
+      const double omega = std::sqrt(bond_stiffness[k] * s.inverse_mass_per_kg[k]);
+      report.bond_critical_step_s = std::min(report.bond_critical_step_s, 2.0 / omega);
+    }
+    for (const auto& law : model_->interaction(s.type[k], s.type[k]).contact_laws) {
+      // Hertz contact of two equal spheres at 10% radius overlap (a hard impact)
+      const double stiffness =
+          law->normal_stiffness_n_per_m(0.5 * s.radius_m[k], 0.1 * s.radius_m[k]);
+      if (stiffness > 0.0) {
+        const double omega = std::sqrt(stiffness * 2.0 * s.inverse_mass_per_kg[k]);
+        report.contact_critical_step_s = std::min(report.contact_critical_step_s, 2.0 / omega);
+      }
+    }
+  }
+  report.rayleigh_fraction = report.timestep_s / report.rayleigh_time_s;
+  std::ostringstream text;
+  text << "timestep " << report.timestep_s << " s = " << 100.0 * report.rayleigh_fraction
+       << "% of the Rayleigh time " << report.rayleigh_time_s << " s; bond critical step 2/omega "
+       << report.bond_critical_step_s << " s; contact critical step (10% overlap) "
+       << report.contact_critical_step_s << " s";
+  // Limits: EDEM advises 20-40% of the Rayleigh time; an explicit oscillator needs dt < 2/omega
+  // for stability and a fifth of it (over 15 steps per period) for a ~1% accurate period.
+  if (report.rayleigh_fraction > 0.4) {
+    report.ok = false;
+    text << "; TOO LARGE: above 40% of the Rayleigh time";
+  }
+  if (report.timestep_s > 0.2 * report.bond_critical_step_s) {
+    report.ok = false;
+    text << "; TOO LARGE for the bonds: above 0.2 * " << report.bond_critical_step_s << " s";
+  }
+  if (report.timestep_s > 0.2 * report.contact_critical_step_s) {
+    report.ok = false;
+    text << "; TOO LARGE for the contact stiffness: above 0.2 * " << report.contact_critical_step_s
+         << " s";
+  }
+  report.message = text.str();
+  return report;
+}
+
+}  // namespace fl::dem

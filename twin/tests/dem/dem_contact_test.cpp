@@ -1,0 +1,151 @@
+// Contact laws against analytic answers: Hertz impact, restitution, JKR pull-off, Coulomb.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "dem_test_support.hpp"
+#include "fl/twin/dem/config.hpp"
+
+namespace fl::dem {
+namespace {
+
+using test::kRadius;
+
+// Hertz impact of a sphere on a plane of the same material without damping (e = 1).
+// Theory (Johnson 1985, 11.1): contact duration t = 2.87 (m*^2 / (R* E*^2 v))^(1/5), maximum
+// overlap d = (15 m* v^2 / (16 E* sqrt(R*)))^(2/5), peak force 4/3 E* sqrt(R*) d^1.5.
+TEST(DemHertz, SphereOnPlaneContactDurationAndPeakForce) {
+  const double dt = 1e-6;  // about 2,700 steps per contact: integration error far below 2%
+  auto model =
+      std::make_shared<Model>(test::ball_model({test::hertz(1.0)}, dt, Vec3::Zero(), true));
+  Simulation sim(model);
+  const double speed = 0.5;  // m/s, a fillet dropped about 13 mm
+  sim.add_sphere({Vec3(0, 0, kRadius + 1e-5), kRadius, 0, Vec3(0, 0, -speed)});
+  const double e_star = model->interaction(0, 1).material.effective_youngs_modulus_pa;
+  const double m = test::sphere_mass();
+  double first_touch = -1.0;
+  double last_touch = -1.0;
+  double peak_force = 0.0;
+  for (int k = 0; k < 20000; ++k) {
+    sim.step();
+    const double force = sim.state().force_n[0].z();
+    if (force > 0.0) {
+      if (first_touch < 0.0) first_touch = sim.state().time_s - dt;
+      last_touch = sim.state().time_s;
+      peak_force = std::max(peak_force, force);
+    }
+  }
+  const double duration = last_touch - first_touch;
+  const double expected_duration =
+      2.87 * std::pow(m * m / (kRadius * e_star * e_star * speed), 0.2);
+  const double max_overlap =
+      std::pow(15.0 * m * speed * speed / (16.0 * e_star * std::sqrt(kRadius)), 0.4);
+  const double expected_peak = 4.0 / 3.0 * e_star * std::sqrt(kRadius) * std::pow(max_overlap, 1.5);
+  EXPECT_NEAR(duration, expected_duration, 0.02 * expected_duration);
+  EXPECT_NEAR(peak_force, expected_peak, 0.02 * expected_peak);
+  EXPECT_NEAR(sim.state().velocity_m_per_s[0].z(), speed, 1e-3 * speed);  // elastic: e = 1
+}
+
+// Eq. 3.2 damping: head-on sphere-sphere impact returns the configured restitution.
+class DemRestitution : public ::testing::TestWithParam<double> {};
+
+TEST_P(DemRestitution, HeadOnSphereSphere) {
+  const double restitution = GetParam();
+  auto model = std::make_shared<Model>(test::ball_model({test::hertz(restitution)}, 1e-6));
+  Simulation sim(model);
+  const double speed = 0.25;  // each, towards the other
+  sim.add_sphere({Vec3(-kRadius - 1e-5, 0, 0), kRadius, 0, Vec3(speed, 0, 0)});
+  sim.add_sphere({Vec3(kRadius + 1e-5, 0, 0), kRadius, 0, Vec3(-speed, 0, 0)});
+  sim.step(20000);  // contact lasts about 3.4 ms; 20 ms leaves them well apart
+  const double separation_speed =
+      sim.state().velocity_m_per_s[1].x() - sim.state().velocity_m_per_s[0].x();
+  EXPECT_NEAR(separation_speed / (2.0 * speed), restitution, 0.02 * restitution);
+}
+
+INSTANTIATE_TEST_SUITE_P(SeveralCoefficients, DemRestitution, ::testing::Values(0.1, 0.5, 0.9));
+
+// JKR (laws.hpp): scanning the overlap, the most tensile force is the pull-off force
+// 1.5 pi w R*, reached at a^3 = 9 pi w R*^2 / (8 E*); the neck holds down to delta_c and not
+// beyond.
+TEST(DemJkr, PullOffForceAndNeckBreak) {
+  const ModelSpec spec = appendix_b_model_spec();
+  const Model model(spec);
+  const Interaction& fillets = model.interaction(0, 0);
+  const double w = 0.055;
+  const double r_star = kRadius / 2.0;
+  const double e_star = fillets.material.effective_youngs_modulus_pa;
+  const ContactLaw& jkr = *fillets.contact_laws[1];
+  const double delta_c = jkr_break_overlap_m(w, r_star, e_star);
+  ASSERT_LT(delta_c, 0.0);
+  EXPECT_NEAR(jkr.range_m(r_star), -delta_c, 1e-15);
+
+  PairGeometry g;
+  g.effective_radius_m = r_star;
+  g.effective_mass_kg = test::sphere_mass() / 2.0;
+  g.timestep_s = 1e-4;
+  PairState state;
+  double most_tensile = 0.0;
+  const int samples = 20000;
+  for (int k = 0; k <= samples; ++k) {  // unloading from 20 um overlap to delta_c
+    g.overlap_m = 20e-6 + (delta_c * (1.0 - 1e-9) - 20e-6) * k / samples;
+    ForceAccumulator f;
+    for (const auto& law : fillets.contact_laws) law->compute(g, state, f);
+    ASSERT_TRUE(f.touching) << "neck lost at overlap " << g.overlap_m;
+    most_tensile = std::min(most_tensile, f.normal_force_n);
+  }
+  const double pull_off = jkr_pull_off_force_n(w, r_star);
+  EXPECT_NEAR(pull_off, 1.5 * std::numbers::pi * w * r_star, 1e-15);
+  EXPECT_NEAR(-most_tensile, pull_off, 1e-4 * pull_off);
+  // Beyond delta_c the neck breaks: no force, and none on re-approach until touching.
+  g.overlap_m = delta_c * 1.001;
+  ForceAccumulator beyond;
+  for (const auto& law : fillets.contact_laws) law->compute(g, state, beyond);
+  EXPECT_FALSE(beyond.touching);
+  g.overlap_m = delta_c * 0.5;
+  ForceAccumulator gap;
+  for (const auto& law : fillets.contact_laws) law->compute(g, state, gap);
+  EXPECT_FALSE(gap.touching);
+  // Independent check of the force formula at the pull-off contact radius.
+  const double a = std::cbrt(9.0 * std::numbers::pi * w * r_star * r_star / (8.0 * e_star));
+  EXPECT_NEAR(jkr_force_n(w, r_star, e_star, a), -pull_off, 1e-9 * pull_off);
+  const double overlap_at_a = a * a / r_star - std::sqrt(2.0 * std::numbers::pi * w * a / e_star);
+  EXPECT_NEAR(jkr_contact_radius_m(w, r_star, e_star, overlap_at_a), a, 1e-9 * a);
+}
+
+// Mesh wall: a sphere resting on the shared edge of two coplanar triangles feels one contact,
+// the same force as on a plane.
+TEST(DemMesh, SharedEdgeCountsOnce) {
+  ModelSpec spec = test::ball_model({test::hertz(1.0)}, 1e-5);
+  const double half = 0.05;
+  spec.meshes.push_back({"floor",
+                         1,
+                         {{{Vec3(-half, -half, 0), Vec3(half, -half, 0), Vec3(half, half, 0)}},
+                          {{Vec3(-half, -half, 0), Vec3(half, half, 0), Vec3(-half, half, 0)}}}});
+  Simulation sim(std::make_shared<Model>(spec));
+  const double overlap = 1e-4;
+  sim.add_sphere({Vec3(0.01, 0.01, kRadius - overlap), kRadius, 0});   // on the diagonal edge
+  sim.add_sphere({Vec3(0.02, -0.01, kRadius - overlap), kRadius, 0});  // inside one face
+  sim.prepare();
+  const double e_star = sim.model().interaction(0, 1).material.effective_youngs_modulus_pa;
+  const double hertz = 4.0 / 3.0 * e_star * std::sqrt(kRadius) * std::pow(overlap, 1.5);
+  EXPECT_NEAR(sim.state().force_n[0].z(), hertz, 1e-9 * hertz);
+  EXPECT_NEAR(sim.state().force_n[1].z(), hertz, 1e-9 * hertz);
+}
+
+// Conveyor: a sphere on a belt (plane with surface velocity) is dragged up to belt speed.
+TEST(DemWalls, BeltDragsSphereAlong) {
+  ModelSpec spec =
+      test::ball_model({test::hertz(0.3), test::coulomb(0.5)}, 2e-5, Vec3(0, 0, -9.81), true);
+  Simulation sim(std::make_shared<Model>(spec));
+  sim.add_sphere({Vec3(0, 0, kRadius), kRadius, 0});
+  sim.wall("floor").surface_velocity_m_per_s = Vec3(0.3, 0, 0);
+  sim.step(50000);  // 1 s
+  // Friction at the contact is the only horizontal force, so angular momentum about the
+  // contact line is conserved (zero): m v r + I w = 0 with I = 2/5 m r^2; rolling without slip
+  // on the belt (v - w r = v_belt) then gives v = 2/7 v_belt.
+  EXPECT_NEAR(sim.state().velocity_m_per_s[0].x(), 0.3 * 2.0 / 7.0, 0.01 * 0.3 * 2.0 / 7.0);
+}
+
+}  // namespace
+}  // namespace fl::dem

@@ -1,0 +1,51 @@
+// Small models for the DEM engine tests.
+#pragma once
+
+#include <memory>
+
+#include "fl/twin/dem/simulation.hpp"
+
+namespace fl::dem::test {
+
+inline constexpr double kRadius = 0.004;  // m, the fillet sub-particle
+inline constexpr double kYoungs = 3.7e5;  // Pa, appendix B
+inline constexpr double kPoisson = 0.37;
+inline constexpr double kDensity = 940.0;
+
+inline double sphere_mass(double radius = kRadius) {
+  return kDensity * 4.0 / 3.0 * 3.14159265358979323846 * radius * radius * radius;
+}
+
+// One fillet material; type 0 "ball", type 1 "wall" (same material). `ball_laws` applies to
+// ball-ball and ball-wall pairs.
+inline ModelSpec ball_model(std::vector<LawSpec> ball_laws, double timestep_s,
+                            Vec3 gravity = Vec3::Zero(), bool with_plane = false) {
+  ModelSpec spec;
+  spec.materials = {{"fillet", kYoungs, kPoisson, kDensity}};
+  spec.types = {{"ball", 0}, {"wall", 0}};
+  spec.interactions = {{0, 0, ball_laws, std::nullopt, false},
+                       {0, 1, ball_laws, std::nullopt, false}};
+  spec.timestep_s = timestep_s;
+  spec.gravity_m_per_s2 = gravity;
+  spec.domain.lower_m = Vec3(-0.2, -0.2, -0.05);
+  spec.domain.upper_m = Vec3(0.2, 0.2, 0.3);
+  if (with_plane) {
+    spec.planes.push_back({"floor", 1, Vec3::Zero(), Vec3::UnitZ()});
+  }
+  return spec;
+}
+
+inline LawSpec hertz(double restitution) {
+  return {"hertz_mindlin", {{"restitution", restitution}}};
+}
+inline LawSpec coulomb(double mu) { return {"coulomb", {{"friction_coefficient", mu}}}; }
+inline LawSpec bpm(double normal_n_per_m3, double shear_n_per_m3, double normal_strength_pa = 1e300,
+                   double shear_strength_pa = 1e300) {
+  return {"bpm",
+          {{"normal_stiffness_n_per_m3", normal_n_per_m3},
+           {"shear_stiffness_n_per_m3", shear_n_per_m3},
+           {"normal_strength_pa", normal_strength_pa},
+           {"shear_strength_pa", shear_strength_pa}}};
+}
+
+}  // namespace fl::dem::test
