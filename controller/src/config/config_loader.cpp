@@ -201,7 +201,6 @@ void read_stations(YamlMapReader& root, LineConfig& config) {
     TrackingConfig& c = config.tracking;
     c.match_gate_mm = tracking.read_float("match_gate_mm", Range::positive());
     c.nominal_length_mm = tracking.read_float("nominal_length_mm", Range::positive());
-    c.lost_after_mm = tracking.read_float("lost_after_mm", Range::positive());
   }
   {
     YamlMapReader watchdog = root.map("watchdog");

@@ -109,7 +109,6 @@ struct ToleranceConfig {
 struct TrackingConfig {
   float match_gate_mm = 80.0F;       // a detection matches a fillet predicted within this
   float nominal_length_mm = 170.0F;  // used before camera 1 measures an item
-  float lost_after_mm = 400.0F;      // expected at a camera but unseen for this much travel
 };
 
 struct WatchdogConfig {
