@@ -1,6 +1,6 @@
-#include <gtest/gtest.h>
-
 #include "../linectl/duration.hpp"
+
+#include <gtest/gtest.h>
 
 namespace fl::apps {
 namespace {
@@ -15,7 +15,8 @@ TEST(ParseDuration, UnitsAndCombinations) {
 }
 
 TEST(ParseDuration, MalformedTextIsRefused) {
-  for (const char* text : {"", "m", "10x", "-5s", "0", "0s", "1h30", "s10", "10 m", "1e400s", "inf", "nan", "infs"}) {
+  for (const char* text :
+       {"", "m", "10x", "-5s", "0", "0s", "1h30", "s10", "10 m", "1e400s", "inf", "nan", "infs"}) {
     EXPECT_FALSE(parse_duration_s(text).has_value()) << '"' << text << '"';
   }
 }
