@@ -210,9 +210,10 @@ constexpr std::array<FastCameraConfig, kCameraCount> default_fast_camera_configs
 }
 
 struct FastPlantConfig {
-  // Internal integration step: 1 ms resolves the 5 ms drive delay, the 25 ms camera period
-  // and 0.6 m/s x 1 ms = 0.6 mm of travel per step.
-  float internal_step_s = 0.001F;
+  // Internal integration step: 2 ms resolves the 5 ms drive delay (to within a step), the
+  // 25 ms camera period and 0.6 m/s x 2 ms = 1.2 mm of travel per step. 1 ms gave the same
+  // closed-loop KPIs (10 min, seed 1: 99.35 against 99.03 % in spec) at 1.6 times the cost.
+  float internal_step_s = 0.002F;
   // Body pool and exit buffer capacities, allocated once at construction. 64 bodies is more
   // than twice what the 6 m line holds at 70 fillets per minute.
   std::uint32_t max_bodies = 64;
