@@ -11,6 +11,7 @@ packages=(
   libopencv-dev cyclonedds-dev cyclonedds-tools
   rt-tests python3
   qemu-system-x86 busybox-static can-utils
+  libzstd-dev liblz4-dev
 )
 
 missing=()
@@ -28,4 +29,19 @@ if ((${#missing[@]})); then
   "${as_root[@]}" apt-get install -y -q --no-install-recommends "${missing[@]}"
 else
   echo "setup: all ${#packages[@]} packages present"
+fi
+
+# The MCAP interoperability test reads and writes files with the reference implementation
+# (@mcap/core from the npm registry), pinned by vision/mcap/interop/package-lock.json.
+# Node.js comes with the machine image here; Debian's own nodejs and npm are the fallback
+# (not installed over an existing Node.js, whose bundled npm they would conflict with).
+sudo_prefix=()
+if ! command -v npm >/dev/null; then
+  [[ $(id -u) -eq 0 ]] || sudo_prefix=(sudo)
+  "${sudo_prefix[@]}" apt-get install -y -q --no-install-recommends nodejs npm
+fi
+here="$(cd "$(dirname "$0")/.." && pwd)"
+if [[ ! -d "$here/vision/mcap/interop/node_modules/@mcap/core" ]]; then
+  echo "setup: installing the MCAP interop test's node modules"
+  npm ci --prefix "$here/vision/mcap/interop" --no-audit --no-fund --ignore-scripts
 fi
