@@ -1,0 +1,580 @@
+// Fillet and checkerboard rendering (fl/twin/render/fillet_renderer.hpp).
+#include "fl/twin/render/fillet_renderer.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+#include "fl/twin/dem/fillet_generator.hpp"
+#include "imaging.hpp"
+
+namespace fl::render {
+namespace {
+
+constexpr double kHeightCellMm = 0.25;  // height-map resolution, finer than any camera pixel
+constexpr double kTextureCellMm = 0.5;  // material texture resolution
+constexpr int kSizeVariants = 3;
+
+// One (size, hand, side) top view: height of the top surface above the belt, in the fillet's
+// frame (u thick end -> tip, v left), sampled at cell centres.
+struct Sprite {
+  cv::Mat1f height_mm;
+  double min_u_mm = 0.0;  // local position of cell (0, 0)'s centre
+  double min_v_mm = 0.0;
+  double max_height_mm = 0.0;
+  double area_mm2 = 0.0;
+  cv::Point2d area_centroid_mm;
+  double radius_mm = 0.0;               // bounding circle about the origin
+  std::vector<cv::Point2d> outline_mm;  // silhouette boundary
+  cv::Size2d size_mm;
+};
+
+// Bilinear height at local (u, v); 0 outside.
+double sample_height(const Sprite& sprite, double u_mm, double v_mm) {
+  const double fx = (u_mm - sprite.min_u_mm) / kHeightCellMm;
+  const double fy = (v_mm - sprite.min_v_mm) / kHeightCellMm;
+  if (fx < 0.0 || fy < 0.0) return 0.0;
+  const int x0 = static_cast<int>(fx);
+  const int y0 = static_cast<int>(fy);
+  if (x0 + 1 >= sprite.height_mm.cols || y0 + 1 >= sprite.height_mm.rows) return 0.0;
+  const double ax = fx - x0;
+  const double ay = fy - y0;
+  const float* r0 = sprite.height_mm.ptr<float>(y0);
+  const float* r1 = sprite.height_mm.ptr<float>(y0 + 1);
+  const double h00 = r0[x0];
+  const double h01 = r0[x0 + 1];
+  const double h10 = r1[x0];
+  const double h11 = r1[x0 + 1];
+  // Any zero corner means the silhouette edge: keep the edge sharp at the mesh outline by
+  // taking the nearest cell there instead of blending towards zero.
+  if (h00 <= 0.0 || h01 <= 0.0 || h10 <= 0.0 || h11 <= 0.0) {
+    const float* nearest = ay < 0.5 ? r0 : r1;
+    return nearest[ax < 0.5 ? x0 : x0 + 1];
+  }
+  return (1 - ay) * ((1 - ax) * h00 + ax * h01) + ay * ((1 - ax) * h10 + ax * h11);
+}
+
+Sprite make_sprite(const dem::TriangleMesh& mesh_m) {
+  std::vector<cv::Point3d> points;
+  points.reserve(mesh_m.vertices.size());
+  double min_u = 1e9, max_u = -1e9, min_v = 1e9, max_v = -1e9, min_z = 1e9;
+  for (const auto& vertex : mesh_m.vertices) {
+    const cv::Point3d p(vertex.x() * 1e3, vertex.y() * 1e3, vertex.z() * 1e3);
+    points.push_back(p);
+    min_u = std::min(min_u, p.x);
+    max_u = std::max(max_u, p.x);
+    min_v = std::min(min_v, p.y);
+    max_v = std::max(max_v, p.y);
+    min_z = std::min(min_z, p.z);
+  }
+  Sprite sprite;
+  sprite.min_u_mm = std::floor(min_u) - 1.0;
+  sprite.min_v_mm = std::floor(min_v) - 1.0;
+  const int cols = static_cast<int>(std::ceil((max_u - sprite.min_u_mm + 1.0) / kHeightCellMm)) + 1;
+  const int rows = static_cast<int>(std::ceil((max_v - sprite.min_v_mm + 1.0) / kHeightCellMm)) + 1;
+  sprite.height_mm = cv::Mat1f::zeros(rows, cols);
+  // Top-down z-buffer: the highest triangle over each cell centre.
+  for (const auto& triangle : mesh_m.triangles) {
+    const cv::Point3d& a = points[triangle[0]];
+    const cv::Point3d& b = points[triangle[1]];
+    const cv::Point3d& c = points[triangle[2]];
+    const double det = (b.y - c.y) * (a.x - c.x) + (c.x - b.x) * (a.y - c.y);
+    if (std::abs(det) < 1e-12) continue;  // seen edge-on from above
+    const auto to_col = [&](double u) { return (u - sprite.min_u_mm) / kHeightCellMm; };
+    const auto to_row = [&](double v) { return (v - sprite.min_v_mm) / kHeightCellMm; };
+    const int c0 = std::max(0, static_cast<int>(std::floor(to_col(std::min({a.x, b.x, c.x})))));
+    const int c1 =
+        std::min(cols - 1, static_cast<int>(std::ceil(to_col(std::max({a.x, b.x, c.x})))));
+    const int r0 = std::max(0, static_cast<int>(std::floor(to_row(std::min({a.y, b.y, c.y})))));
+    const int r1 =
+        std::min(rows - 1, static_cast<int>(std::ceil(to_row(std::max({a.y, b.y, c.y})))));
+    for (int row = r0; row <= r1; ++row) {
+      const double v = sprite.min_v_mm + row * kHeightCellMm;
+      for (int col = c0; col <= c1; ++col) {
+        const double u = sprite.min_u_mm + col * kHeightCellMm;
+        const double w0 = ((b.y - c.y) * (u - c.x) + (c.x - b.x) * (v - c.y)) / det;
+        const double w1 = ((c.y - a.y) * (u - c.x) + (a.x - c.x) * (v - c.y)) / det;
+        const double w2 = 1.0 - w0 - w1;
+        if (w0 < -1e-9 || w1 < -1e-9 || w2 < -1e-9) continue;
+        const double height = w0 * a.z + w1 * b.z + w2 * c.z - min_z;
+        float& cell = sprite.height_mm(row, col);
+        // A tiny floor keeps cells inside the silhouette non-zero where the surface meets
+        // the belt at the rim.
+        cell = std::max(cell, static_cast<float>(std::max(height, 0.05)));
+      }
+    }
+  }
+  double area_cells = 0.0, sum_u = 0.0, sum_v = 0.0, max_height = 0.0, radius2 = 0.0;
+  for (int row = 0; row < rows; ++row) {
+    for (int col = 0; col < cols; ++col) {
+      const double h = sprite.height_mm(row, col);
+      if (h <= 0.0) continue;
+      const double u = sprite.min_u_mm + col * kHeightCellMm;
+      const double v = sprite.min_v_mm + row * kHeightCellMm;
+      area_cells += 1.0;
+      sum_u += u;
+      sum_v += v;
+      max_height = std::max(max_height, h);
+      radius2 = std::max(radius2, u * u + v * v);
+    }
+  }
+  sprite.area_mm2 = area_cells * kHeightCellMm * kHeightCellMm;
+  sprite.area_centroid_mm = {sum_u / area_cells, sum_v / area_cells};
+  sprite.max_height_mm = max_height;
+  sprite.radius_mm = std::sqrt(radius2) + kHeightCellMm;
+  sprite.size_mm = {max_u - min_u, max_v - min_v};
+
+  cv::Mat mask;
+  cv::compare(sprite.height_mm, 0.0, mask, cv::CMP_GT);
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  for (const auto& contour : contours) {
+    for (const auto& p : contour) {
+      sprite.outline_mm.emplace_back(sprite.min_u_mm + p.x * kHeightCellMm,
+                                     sprite.min_v_mm + p.y * kHeightCellMm);
+    }
+  }
+  return sprite;
+}
+
+std::size_t sprite_index(int shape_variant, int size_variant, Hand hand, SideUp side) {
+  return static_cast<std::size_t>(shape_variant * kSizeVariants + size_variant) * 4 +
+         (hand == Hand::kRight ? 2 : 0) + (side == SideUp::kBone ? 1 : 0);
+}
+
+std::size_t sprite_index(const FilletInstance& fillet) {
+  return sprite_index(fillet.shape_variant, fillet.size_variant, fillet.hand, fillet.side);
+}
+
+void check_instance(const FilletInstance& fillet, int shape_variants) {
+  if (fillet.shape_variant < 0 || fillet.shape_variant >= shape_variants) {
+    throw std::invalid_argument("FilletRenderer: shape_variant out of range");
+  }
+  if (fillet.size_variant < 0 || fillet.size_variant >= kSizeVariants || !(fillet.scale > 0.2) ||
+      !(fillet.scale < 5.0) || (fillet.hand != Hand::kLeft && fillet.hand != Hand::kRight) ||
+      (fillet.side != SideUp::kSkin && fillet.side != SideUp::kBone) ||
+      !std::isfinite(fillet.x_mm) || !std::isfinite(fillet.y_mm) ||
+      !std::isfinite(fillet.angle_rad)) {
+    throw std::invalid_argument("FilletRenderer: fillet with an invalid size, scale, hand or side");
+  }
+}
+
+// Deterministic per-cell hash in [-1, 1]: belt grain that moves with the belt.
+double hash_noise(std::int64_t i, std::int64_t j, std::uint64_t seed) {
+  std::uint64_t h = seed ^ (static_cast<std::uint64_t>(i) * 0x9E3779B97F4A7C15ULL) ^
+                    (static_cast<std::uint64_t>(j) * 0xC2B2AE3D27D4EB4FULL);
+  h ^= h >> 33U;
+  h *= 0xFF51AFD7ED558CCDULL;
+  h ^= h >> 33U;
+  return static_cast<double>(h >> 11U) * 0x1.0p-52 - 1.0;
+}
+
+cv::Vec3d belt_colour_at(const BeltAppearance& belt, cv::Point2d p_mm, std::uint64_t seed) {
+  constexpr double kGrainMm = 0.5;
+  const double x = p_mm.x + belt.travel_offset_mm;
+  const auto gi = static_cast<std::int64_t>(std::floor(x / kGrainMm));
+  const auto gj = static_cast<std::int64_t>(std::floor(p_mm.y / kGrainMm));
+  double factor = 1.0;
+  if (belt.hinge_pitch_mm > 0.0) {
+    const double phase = x - belt.hinge_pitch_mm * std::floor(x / belt.hinge_pitch_mm);
+    if (phase < belt.hinge_width_mm) factor -= belt.hinge_darkening;
+  }
+  const double grain = belt.grain_amplitude * hash_noise(gi, gj, seed);
+  return belt.colour_bgr * factor + cv::Vec3d::all(grain);
+}
+
+// Zero-mean, unit-std Gaussian noise blurred with the given sigmas (texture cells).
+cv::Mat1f blurred_noise(cv::RNG& rng, cv::Size size, double sigma_u, double sigma_v) {
+  cv::Mat1f noise(size);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 1.0);
+  cv::GaussianBlur(noise, noise, cv::Size(0, 0), sigma_u, sigma_v, cv::BORDER_REFLECT);
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(noise, mean, stddev);
+  noise = (noise - mean[0]) / std::max(stddev[0], 1e-9);
+  return noise;
+}
+
+double sample_texture(const cv::Mat1f& texture, double col, double row) {
+  const int c = std::clamp(static_cast<int>(col), 0, texture.cols - 1);
+  const int r = std::clamp(static_cast<int>(row), 0, texture.rows - 1);
+  return texture(r, c);
+}
+
+// Everything a frame needs about one fillet: transforms, material and its textures.
+struct PreparedFillet {
+  const Sprite* sprite = nullptr;
+  FilletInstance instance;
+  double cos_a = 1.0, sin_a = 0.0;
+  double reach_mm = 0.0;
+  cv::Vec3d albedo_bgr;
+  cv::Vec3d light_local;  // light direction in the fillet's frame
+  bool skin = true;
+  cv::Mat1f fibre, fat, mottle;  // texture cells over the sprite's extent (unscaled local mm)
+  double fibre_cos = 1.0, fibre_sin = 0.0;
+};
+
+// The appearance constants (BGR, 8-bit scale under the nominal light). Chosen to look like
+// raw chicken breast: the skin side pale pink-beige, the bone side pinker (R - G larger).
+constexpr std::array<double, 3> kSkinBgr{150.0, 168.0, 222.0};
+constexpr std::array<double, 3> kBoneBgr{128.0, 132.0, 218.0};
+constexpr std::array<double, 3> kFatBgr{196.0, 218.0, 238.0};
+constexpr double kColourJitterPerChannel = 0.03;  // relative std per fillet and channel
+constexpr double kBrightnessJitter = 0.05;        // relative std per fillet
+constexpr double kFibreContrast = 0.10;           // relative albedo change per unit fibre noise
+constexpr double kMottleContrast = 0.04;
+constexpr double kFatStreakBlend = 0.6;
+constexpr double kTranslucencyMm = 2.0;  // meat this thin lets half the belt colour through
+
+PreparedFillet prepare(const Sprite& sprite, const FilletInstance& fillet, const Scene& scene,
+                       std::size_t index) {
+  PreparedFillet p;
+  p.sprite = &sprite;
+  p.instance = fillet;
+  p.cos_a = std::cos(fillet.angle_rad);
+  p.sin_a = std::sin(fillet.angle_rad);
+  p.reach_mm = sprite.radius_mm * fillet.scale;
+  p.skin = fillet.side == SideUp::kSkin;
+  cv::RNG rng(scene.seed * 7919ULL + index * 104729ULL + 17ULL);
+  const auto& base = p.skin ? kSkinBgr : kBoneBgr;
+  const double brightness = 1.0 + kBrightnessJitter * rng.gaussian(1.0);
+  for (int c = 0; c < 3; ++c) {
+    p.albedo_bgr[c] = base[static_cast<std::size_t>(c)] * brightness *
+                      (1.0 + kColourJitterPerChannel * rng.gaussian(1.0));
+  }
+  // Light into the fillet frame (rotate by -angle).
+  cv::Vec3d light = scene.imaging.light_direction;
+  light /= cv::norm(light);
+  p.light_local = {p.cos_a * light[0] + p.sin_a * light[1],
+                   -p.sin_a * light[0] + p.cos_a * light[1], light[2]};
+  const cv::Size cells(
+      static_cast<int>(std::ceil(sprite.height_mm.cols * kHeightCellMm / kTextureCellMm)),
+      static_cast<int>(std::ceil(sprite.height_mm.rows * kHeightCellMm / kTextureCellMm)));
+  // Fibres: streaks ~12 mm long, ~1 mm wide, along the fillet within +-15 degrees.
+  p.fibre = blurred_noise(rng, cells, 6.0 / kTextureCellMm * 0.5, 0.6 / kTextureCellMm);
+  // Fat / connective tissue: sparse whitish streaks, the top few percent of smoother noise.
+  p.fat = blurred_noise(rng, cells, 10.0 / kTextureCellMm * 0.5, 1.0 / kTextureCellMm);
+  p.mottle = blurred_noise(rng, cells, 4.0 / kTextureCellMm, 4.0 / kTextureCellMm);
+  const double fibre_angle = rng.uniform(-0.26, 0.26);
+  p.fibre_cos = std::cos(fibre_angle);
+  p.fibre_sin = std::sin(fibre_angle);
+  return p;
+}
+
+// Meat radiance at local (u, v) (unscaled mm) with height h_mm (scaled), given the belt under it.
+cv::Vec3d shade(const PreparedFillet& p, double u, double v, double h_scaled_mm,
+                const cv::Vec3d& belt_under) {
+  const Sprite& s = *p.sprite;
+  const double scale = p.instance.scale;
+  // Normal from central differences of the (unscaled) height map; the height scales with the
+  // fillet as its footprint does, so slopes stay the same.
+  constexpr double kStep = 0.75;
+  const double hu = sample_height(s, u + kStep, v) - sample_height(s, u - kStep, v);
+  const double hv = sample_height(s, u, v + kStep) - sample_height(s, u, v - kStep);
+  cv::Vec3d normal(-hu / (2 * kStep), -hv / (2 * kStep), 1.0);
+  normal /= cv::norm(normal);
+  const cv::Vec3d& light = p.light_local;
+  const double lambert = std::max(0.0, normal.dot(light)) / light[2];
+  const double thickness_share = std::clamp(h_scaled_mm / (s.max_height_mm * scale), 0.0, 1.0);
+  const double brightness = (0.55 + 0.45 * lambert) * (0.88 + 0.17 * thickness_share);
+
+  const double tc = (u - s.min_u_mm) / kTextureCellMm;
+  const double tr = (v - s.min_v_mm) / kTextureCellMm;
+  cv::Vec3d albedo = p.albedo_bgr;
+  if (p.skin) {
+    albedo *= 1.0 + kMottleContrast * sample_texture(p.mottle, tc, tr);
+  } else {
+    // Fibres follow a direction turned by the fillet's fibre angle.
+    const double cu = s.min_u_mm + 0.5 * s.height_mm.cols * kHeightCellMm;
+    const double cv_ = s.min_v_mm + 0.5 * s.height_mm.rows * kHeightCellMm;
+    const double fu = cu + p.fibre_cos * (u - cu) + p.fibre_sin * (v - cv_);
+    const double fv = cv_ - p.fibre_sin * (u - cu) + p.fibre_cos * (v - cv_);
+    albedo *= 1.0 + kFibreContrast * sample_texture(p.fibre, (fu - s.min_u_mm) / kTextureCellMm,
+                                                    (fv - s.min_v_mm) / kTextureCellMm);
+    const double fat_value = sample_texture(p.fat, tc, tr);
+    const double fat_share = kFatStreakBlend * std::clamp((fat_value - 1.8) / 0.6, 0.0, 1.0);
+    albedo = (1.0 - fat_share) * albedo + fat_share * cv::Vec3d(kFatBgr[0], kFatBgr[1], kFatBgr[2]);
+  }
+  cv::Vec3d colour = albedo * brightness;
+  const double opacity = 1.0 - std::exp(-h_scaled_mm / kTranslucencyMm * std::numbers::ln2);
+  colour = opacity * colour + (1.0 - opacity) * belt_under;
+
+  // Blinn-Phong highlight, camera straight above: skin glossy and tight, bone weak and broad.
+  cv::Vec3d half_vector = light + cv::Vec3d(0.0, 0.0, 1.0);
+  half_vector /= cv::norm(half_vector);
+  const double n_dot_h = std::max(0.0, normal.dot(half_vector));
+  const double specular = p.skin ? 70.0 * std::pow(n_dot_h, 30.0) : 18.0 * std::pow(n_dot_h, 6.0);
+  return colour + cv::Vec3d::all(specular * opacity);
+}
+
+}  // namespace
+
+struct FilletRenderer::Sprites {
+  int shape_variants = 1;
+  std::vector<Sprite> by_index;
+};
+
+dem::FilletShapeParams random_shape(std::uint64_t seed) {
+  cv::RNG rng(seed);
+  dem::FilletShapeParams shape;
+  shape.thickest_at = rng.uniform(0.25, 0.35);
+  shape.thick_end_thickness = rng.uniform(0.65, 0.85);
+  shape.tip_thickness = rng.uniform(0.10, 0.20);
+  shape.widest_at = rng.uniform(0.32, 0.44);
+  shape.thick_end_width = rng.uniform(0.55, 0.75);
+  shape.tip_width = rng.uniform(0.08, 0.16);
+  shape.thick_end_cap = rng.uniform(0.12, 0.20);
+  shape.tip_cap = rng.uniform(0.03, 0.07);
+  shape.edge_bias = rng.uniform(0.30, 0.60);
+  shape.top_share = rng.uniform(0.62, 0.78);
+  return shape;
+}
+
+FilletRenderer::FilletRenderer(int shape_variants, std::uint64_t shape_seed)
+    : sprites_(std::make_unique<Sprites>()) {
+  if (shape_variants < 1) throw std::invalid_argument("FilletRenderer: shape_variants < 1");
+  sprites_->shape_variants = shape_variants;
+  sprites_->by_index.resize(static_cast<std::size_t>(shape_variants * kSizeVariants * 4));
+  const auto variants = dem::thesis_fillet_variants();
+  for (int shape = 0; shape < shape_variants; ++shape) {
+    const dem::TriangleMesh base = dem::make_fillet_mesh(
+        shape == 0 ? dem::FilletShapeParams{}
+                   : random_shape(shape_seed * 1000003ULL + static_cast<std::uint64_t>(shape)));
+    for (const auto& variant : variants) {
+      const int size = static_cast<int>(&variant - variants.data()) / 2;
+      const Hand hand = variant.side == dem::FilletSide::left ? Hand::kLeft : Hand::kRight;
+      const dem::TriangleMesh skin_up = dem::make_variant_mesh(base, variant);
+      // Bone side up: turned over about the long axis (a half turn: y -> -y and z -> -z).
+      dem::TriangleMesh bone_up = skin_up;
+      for (auto& vertex : bone_up.vertices) {
+        vertex = Eigen::Vector3d(vertex.x(), -vertex.y(), -vertex.z());
+      }
+      sprites_->by_index[sprite_index(shape, size, hand, SideUp::kSkin)] = make_sprite(skin_up);
+      sprites_->by_index[sprite_index(shape, size, hand, SideUp::kBone)] = make_sprite(bone_up);
+    }
+  }
+}
+
+int FilletRenderer::shape_variants() const { return sprites_->shape_variants; }
+
+FilletRenderer::~FilletRenderer() = default;
+FilletRenderer::FilletRenderer(FilletRenderer&&) noexcept = default;
+FilletRenderer& FilletRenderer::operator=(FilletRenderer&&) noexcept = default;
+
+double FilletRenderer::silhouette_area_mm2(int size_variant) const {
+  if (size_variant < 0 || size_variant >= kSizeVariants) throw std::out_of_range("size_variant");
+  return sprites_->by_index[sprite_index(0, size_variant, Hand::kLeft, SideUp::kSkin)].area_mm2;
+}
+
+cv::Size2d FilletRenderer::silhouette_size_mm(int size_variant) const {
+  if (size_variant < 0 || size_variant >= kSizeVariants) throw std::out_of_range("size_variant");
+  return sprites_->by_index[sprite_index(0, size_variant, Hand::kLeft, SideUp::kSkin)].size_mm;
+}
+
+RenderedFrame FilletRenderer::render(const RenderCamera& camera, const Scene& scene) const {
+  if (camera.width_px <= 0 || camera.height_px <= 0 || scene.supersampling < 1) {
+    throw std::invalid_argument("FilletRenderer::render: empty camera or supersampling < 1");
+  }
+  std::vector<PreparedFillet> prepared;
+  prepared.reserve(scene.fillets.size());
+  for (std::size_t i = 0; i < scene.fillets.size(); ++i) {
+    const auto& fillet = scene.fillets[i];
+    check_instance(fillet, sprites_->shape_variants);
+    prepared.push_back(prepare(sprites_->by_index[sprite_index(fillet)], fillet, scene, i));
+  }
+
+  const cv::Matx33d image_to_belt = camera.belt_to_image.inv();
+  const int n = scene.supersampling;
+  cv::Mat radiance(camera.height_px, camera.width_px, CV_32FC3);
+  for (int row = 0; row < camera.height_px; ++row) {
+    auto* out = radiance.ptr<cv::Vec3f>(row);
+    for (int col = 0; col < camera.width_px; ++col) {
+      cv::Vec3d sum(0, 0, 0);
+      for (int sy = 0; sy < n; ++sy) {
+        for (int sx = 0; sx < n; ++sx) {
+          const double pu = col - 0.5 + (sx + 0.5) / n;
+          const double pv = row - 0.5 + (sy + 0.5) / n;
+          const cv::Vec3d b = image_to_belt * cv::Vec3d(pu, pv, 1.0);
+          const cv::Point2d belt_mm(b[0] / b[2], b[1] / b[2]);
+          const cv::Vec3d belt = belt_colour_at(scene.belt, belt_mm, scene.seed);
+          // The highest fillet surface over this point is the one seen.
+          const PreparedFillet* top = nullptr;
+          double top_height = 0.0, top_u = 0.0, top_v = 0.0;
+          for (const auto& p : prepared) {
+            const double dx = belt_mm.x - p.instance.x_mm;
+            const double dy = belt_mm.y - p.instance.y_mm;
+            if (std::abs(dx) > p.reach_mm || std::abs(dy) > p.reach_mm) continue;
+            const double u = (p.cos_a * dx + p.sin_a * dy) / p.instance.scale;
+            const double v = (-p.sin_a * dx + p.cos_a * dy) / p.instance.scale;
+            const double h = sample_height(*p.sprite, u, v) * p.instance.scale;
+            if (h > top_height) {
+              top_height = h;
+              top = &p;
+              top_u = u;
+              top_v = v;
+            }
+          }
+          sum += top == nullptr ? belt : shade(*top, top_u, top_v, top_height, belt);
+        }
+      }
+      out[col] = cv::Vec3f(sum * (1.0 / (n * n)));
+    }
+  }
+
+  RenderedFrame frame;
+  frame.bgr = detail::apply_imaging(radiance, camera, scene.imaging, scene.seed);
+  for (const auto& p : prepared) {
+    FilletTruth truth;
+    truth.fillet = p.instance;
+    const auto to_belt = [&](cv::Point2d local) {
+      const double u = local.x * p.instance.scale;
+      const double v = local.y * p.instance.scale;
+      return cv::Point2d(p.instance.x_mm + p.cos_a * u - p.sin_a * v,
+                         p.instance.y_mm + p.sin_a * u + p.cos_a * v);
+    };
+    truth.fully_visible = true;
+    for (const auto& local : p.sprite->outline_mm) {
+      const cv::Point2d px = belt_to_pixel(camera, to_belt(local));
+      if (px.x < 1.0 || px.y < 1.0 || px.x > camera.width_px - 2.0 ||
+          px.y > camera.height_px - 2.0) {
+        truth.fully_visible = false;
+        break;
+      }
+    }
+    truth.singulated =
+        p.instance.group_id < 0 ||
+        std::count_if(scene.fillets.begin(), scene.fillets.end(), [&](const FilletInstance& other) {
+          return other.group_id == p.instance.group_id;
+        }) == 1;
+    truth.centre_px = belt_to_pixel(camera, {p.instance.x_mm, p.instance.y_mm});
+    truth.silhouette_area_mm2 = p.sprite->area_mm2 * p.instance.scale * p.instance.scale;
+    truth.silhouette_centroid_mm = to_belt(p.sprite->area_centroid_mm);
+    frame.truth.push_back(truth);
+  }
+  return frame;
+}
+
+cv::Point2d checkerboard_corner_mm(const CheckerboardOnBelt& board, int i, int j) {
+  const double c = std::cos(board.yaw_rad);
+  const double s = std::sin(board.yaw_rad);
+  const double bx = i * board.square_mm;
+  const double by = j * board.square_mm;
+  return {board.origin_x_mm + c * bx - s * by, board.origin_y_mm + s * bx + c * by};
+}
+
+cv::Mat FilletRenderer::render_checkerboard(const RenderCamera& camera,
+                                            const CheckerboardOnBelt& board,
+                                            const BeltAppearance& belt,
+                                            const ImagingConditions& imaging,
+                                            std::uint64_t seed) const {
+  if (board.inner_corners_x < 2 || board.inner_corners_y < 2 || !(board.square_mm > 0.0)) {
+    throw std::invalid_argument(
+        "render_checkerboard: board needs >= 2 x 2 corners and squares > 0");
+  }
+  constexpr double kWhite = 225.0;
+  constexpr double kBlack = 30.0;
+  constexpr int kSamples = 4;  // per axis: anti-aliased square edges for sub-pixel corners
+  const cv::Matx33d image_to_belt = camera.belt_to_image.inv();
+  const double c = std::cos(board.yaw_rad);
+  const double s = std::sin(board.yaw_rad);
+  const double sq = board.square_mm;
+  // Squares span board coordinates [-sq, inner * sq] on each axis.
+  const double min_x = -sq, max_x = board.inner_corners_x * sq;
+  const double min_y = -sq, max_y = board.inner_corners_y * sq;
+  cv::Mat radiance(camera.height_px, camera.width_px, CV_32FC3);
+  for (int row = 0; row < camera.height_px; ++row) {
+    auto* out = radiance.ptr<cv::Vec3f>(row);
+    for (int col = 0; col < camera.width_px; ++col) {
+      cv::Vec3d sum(0, 0, 0);
+      for (int sy = 0; sy < kSamples; ++sy) {
+        for (int sx = 0; sx < kSamples; ++sx) {
+          const double pu = col - 0.5 + (sx + 0.5) / kSamples;
+          const double pv = row - 0.5 + (sy + 0.5) / kSamples;
+          const cv::Vec3d b = image_to_belt * cv::Vec3d(pu, pv, 1.0);
+          const cv::Point2d p(b[0] / b[2], b[1] / b[2]);
+          const double dx = p.x - board.origin_x_mm;
+          const double dy = p.y - board.origin_y_mm;
+          const double bx = c * dx + s * dy;
+          const double by = -s * dx + c * dy;
+          if (bx >= min_x && bx < max_x && by >= min_y && by < max_y) {
+            const auto cell_x = static_cast<long>(std::floor(bx / sq)) + 1;
+            const auto cell_y = static_cast<long>(std::floor(by / sq)) + 1;
+            sum += cv::Vec3d::all((cell_x + cell_y) % 2 == 0 ? kBlack : kWhite);
+          } else if (bx >= min_x - board.margin_mm && bx < max_x + board.margin_mm &&
+                     by >= min_y - board.margin_mm && by < max_y + board.margin_mm) {
+            sum += cv::Vec3d::all(kWhite);
+          } else {
+            sum += belt_colour_at(belt, p, seed);
+          }
+        }
+      }
+      out[col] = cv::Vec3f(sum * (1.0 / (kSamples * kSamples)));
+    }
+  }
+  return detail::apply_imaging(radiance, camera, imaging, seed);
+}
+
+double FilletRenderer::silhouette_height_mm(const FilletInstance& fillet,
+                                            cv::Point2d belt_mm) const {
+  check_instance(fillet, sprites_->shape_variants);
+  const Sprite& sprite = sprites_->by_index[sprite_index(fillet)];
+  const double c = std::cos(fillet.angle_rad);
+  const double s = std::sin(fillet.angle_rad);
+  const double dx = belt_mm.x - fillet.x_mm;
+  const double dy = belt_mm.y - fillet.y_mm;
+  return sample_height(sprite, (c * dx + s * dy) / fillet.scale,
+                       (-s * dx + c * dy) / fillet.scale) *
+         fillet.scale;
+}
+
+std::vector<cv::Point2d> FilletRenderer::silhouette_outline_mm(const FilletInstance& fillet) const {
+  check_instance(fillet, sprites_->shape_variants);
+  const Sprite& sprite = sprites_->by_index[sprite_index(fillet)];
+  const double c = std::cos(fillet.angle_rad);
+  const double s = std::sin(fillet.angle_rad);
+  std::vector<cv::Point2d> outline;
+  outline.reserve(sprite.outline_mm.size());
+  for (const auto& local : sprite.outline_mm) {
+    const double u = local.x * fillet.scale;
+    const double v = local.y * fillet.scale;
+    outline.emplace_back(fillet.x_mm + c * u - s * v, fillet.y_mm + s * u + c * v);
+  }
+  return outline;
+}
+
+FilletInstance make_touching_partner(const FilletRenderer& renderer, FilletInstance& first,
+                                     FilletInstance partner, bool to_the_left,
+                                     double relative_angle_rad, double along_offset_mm,
+                                     double overlap_mm, int group_id) {
+  const double c = std::cos(first.angle_rad);
+  const double s = std::sin(first.angle_rad);
+  const double side = to_the_left ? 1.0 : -1.0;
+  partner.angle_rad = first.angle_rad + relative_angle_rad;
+  partner.group_id = group_id;
+  first.group_id = group_id;
+  const auto place = [&](double lateral_mm) {
+    partner.x_mm = first.x_mm + c * along_offset_mm - s * side * lateral_mm;
+    partner.y_mm = first.y_mm + s * along_offset_mm + c * side * lateral_mm;
+  };
+  const auto touching = [&] {
+    for (const auto& point : renderer.silhouette_outline_mm(partner)) {
+      if (renderer.silhouette_height_mm(first, point) > 0.0) return true;
+    }
+    return false;
+  };
+  // Come in from well apart (two widths) until the silhouettes first meet.
+  constexpr double kStepMm = 0.25;
+  double lateral = 2.5 * (first.scale + partner.scale) * 72.0;
+  place(lateral);
+  while (lateral > 0.0 && !touching()) {
+    lateral -= kStepMm;
+    place(lateral);
+  }
+  place(lateral - overlap_mm);
+  return partner;
+}
+
+}  // namespace fl::render

@@ -1,0 +1,379 @@
+// The fillet estimator (fl/vision/fillet_estimator.hpp); the pipeline is described there.
+#include "fl/vision/fillet_estimator.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+namespace fl::vision {
+namespace {
+
+double clamp01(double value) { return std::clamp(value, 0.0, 1.0); }
+
+float wrap_angle(double angle_rad) {
+  double wrapped = std::remainder(angle_rad, 2.0 * std::numbers::pi);
+  if (wrapped <= -std::numbers::pi) wrapped += 2.0 * std::numbers::pi;
+  return static_cast<float>(wrapped);
+}
+
+struct Otsu {
+  int threshold = 0;
+  double low_mean = 0.0;
+  double high_mean = 0.0;
+};
+
+// Otsu's threshold of an 8-bit histogram, with both class means.
+Otsu otsu(const std::array<double, 256>& histogram) {
+  double total = 0.0, total_sum = 0.0;
+  for (int i = 0; i < 256; ++i) {
+    total += histogram[static_cast<std::size_t>(i)];
+    total_sum += i * histogram[static_cast<std::size_t>(i)];
+  }
+  Otsu best;
+  double best_between = -1.0, low_count = 0.0, low_sum = 0.0;
+  for (int t = 0; t < 255; ++t) {
+    low_count += histogram[static_cast<std::size_t>(t)];
+    low_sum += t * histogram[static_cast<std::size_t>(t)];
+    const double high_count = total - low_count;
+    if (low_count <= 0.0 || high_count <= 0.0) continue;
+    const double low_mean = low_sum / low_count;
+    const double high_mean = (total_sum - low_sum) / high_count;
+    const double between = low_count * high_count * (low_mean - high_mean) * (low_mean - high_mean);
+    if (between > best_between) {
+      best_between = between;
+      best = {t, low_mean, high_mean};
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+std::string_view to_string(FrameStatus status) {
+  switch (status) {
+    case FrameStatus::kOk:
+      return "ok";
+    case FrameStatus::kEmptyFrame:
+      return "empty frame";
+    case FrameStatus::kWrongType:
+      return "wrong pixel type";
+    case FrameStatus::kWrongResolution:
+      return "wrong resolution";
+    case FrameStatus::kNoBelt:
+      return "no belt in view";
+  }
+  return "?";
+}
+
+std::string_view to_string(BlobStatus status) {
+  switch (status) {
+    case BlobStatus::kFillet:
+      return "fillet";
+    case BlobStatus::kCutByBorder:
+      return "cut by the image border";
+    case BlobStatus::kTooSmall:
+      return "too small for a fillet";
+    case BlobStatus::kOverCapacity:
+      return "more fillets than a camera frame holds";
+  }
+  return "?";
+}
+
+CameraFrame FrameResult::to_camera_frame() const {
+  CameraFrame frame;
+  frame.frame_time_ns = frame_time_ns;
+  frame.sequence = sequence;
+  if (status != FrameStatus::kOk) return frame;
+  for (const auto& blob : blobs) {
+    if (blob.status != BlobStatus::kFillet || frame.count >= kMaxEstimatesPerFrame) continue;
+    frame.estimates[frame.count++] = blob.estimate;
+  }
+  return frame;
+}
+
+FilletEstimator::FilletEstimator(BeltCalibration calibration, EstimatorParams params)
+    : calibration_(std::move(calibration)), params_(params) {
+  if (calibration_.image_width_px <= 0 || calibration_.image_height_px <= 0) {
+    throw std::invalid_argument("FilletEstimator: calibration without an image size");
+  }
+  const double mm_per_px = calibration_.mm_per_px_at_centre();
+  if (!(mm_per_px > 0.0) || !std::isfinite(mm_per_px)) {
+    throw std::invalid_argument("FilletEstimator: calibration homography is degenerate");
+  }
+  downscale_ = std::max(1, static_cast<int>(std::lround(params_.working_mm_per_px / mm_per_px)));
+  // Working pixel centre x' covers full pixels [x' k, x' k + k): its centre is x' k + (k-1)/2.
+  const double k = downscale_;
+  const cv::Matx33d work_to_full(k, 0, 0.5 * (k - 1), 0, k, 0.5 * (k - 1), 0, 0, 1);
+  work_to_belt_ = calibration_.image_to_belt * work_to_full;
+}
+
+FrameResult FilletEstimator::estimate(const cv::Mat& bgr, std::int64_t frame_time_ns,
+                                      std::uint32_t sequence) {
+  FrameResult result;
+  result.frame_time_ns = frame_time_ns;
+  result.sequence = sequence;
+  if (bgr.empty()) {
+    result.status = FrameStatus::kEmptyFrame;
+    result.message = "frame has no pixels";
+    return result;
+  }
+  if (bgr.type() != CV_8UC3) {
+    result.status = FrameStatus::kWrongType;
+    result.message = "frame must be 8-bit BGR (CV_8UC3), got type " + std::to_string(bgr.type());
+    return result;
+  }
+  if (bgr.cols != calibration_.image_width_px || bgr.rows != calibration_.image_height_px) {
+    result.status = FrameStatus::kWrongResolution;
+    result.message = "frame is " + std::to_string(bgr.cols) + " x " + std::to_string(bgr.rows) +
+                     " px, calibration '" + calibration_.camera_name + "' is for " +
+                     std::to_string(calibration_.image_width_px) + " x " +
+                     std::to_string(calibration_.image_height_px);
+    return result;
+  }
+  if (downscale_ > 1) {
+    cv::resize(bgr, work_bgr_, cv::Size(bgr.cols / downscale_, bgr.rows / downscale_), 0, 0,
+               cv::INTER_AREA);
+  } else {
+    work_bgr_ = bgr;
+  }
+
+  // Chroma 128 + (R - B) / 2 and brightness.
+  cv::transform(work_bgr_, chroma_, cv::Matx14f(-0.5F, 0.0F, 0.5F, 128.0F));
+  cv::cvtColor(work_bgr_, grey_, cv::COLOR_BGR2GRAY);
+
+  std::array<double, 256> histogram{};
+  std::size_t belt_like = 0;
+  const int belt_low = static_cast<int>(params_.belt_chroma - params_.belt_chroma_tolerance);
+  const int belt_high = static_cast<int>(params_.belt_chroma + params_.belt_chroma_tolerance);
+  const auto min_brightness = static_cast<int>(params_.min_belt_brightness);
+  for (int row = 0; row < chroma_.rows; ++row) {
+    const auto* c = chroma_.ptr<std::uint8_t>(row);
+    const auto* g = grey_.ptr<std::uint8_t>(row);
+    for (int col = 0; col < chroma_.cols; ++col) {
+      histogram[c[col]] += 1.0;
+      belt_like += static_cast<std::size_t>(c[col] >= belt_low && c[col] <= belt_high &&
+                                            g[col] >= min_brightness);
+    }
+  }
+  const double belt_share = static_cast<double>(belt_like) / static_cast<double>(chroma_.total());
+  if (belt_share < params_.min_belt_share) {
+    result.status = FrameStatus::kNoBelt;
+    result.message = "only " + std::to_string(static_cast<int>(100.0 * belt_share)) +
+                     " % of the frame looks like the belt (needs " +
+                     std::to_string(static_cast<int>(100.0 * params_.min_belt_share)) +
+                     " %): covered, dark, blown out or not the belt";
+    return result;
+  }
+  const Otsu split = otsu(histogram);
+  if (split.high_mean - split.low_mean < params_.min_meat_contrast) return result;  // empty belt
+
+  cv::threshold(chroma_, mask_, split.threshold, 255, cv::THRESH_BINARY);
+  static const cv::Mat kOpen = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(3, 3));
+  static const cv::Mat kClose = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5));
+  cv::morphologyEx(mask_, mask_, cv::MORPH_OPEN, kOpen);
+  cv::morphologyEx(mask_, mask_, cv::MORPH_CLOSE, kClose);
+
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(mask_, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  const double work_mm_per_px = calibration_.mm_per_px_at_centre() * downscale_;
+  const double min_area_px = params_.min_blob_area_mm2 / (work_mm_per_px * work_mm_per_px);
+  const int margin = params_.border_margin_px;
+  std::size_t fillets = 0;
+  for (const auto& contour : contours) {
+    BlobResult blob;
+    const cv::Rect box = cv::boundingRect(contour);
+    const double area_px = cv::contourArea(contour);
+    // A generous pre-filter in pixels (the mm area below decides): debris costs nothing.
+    if (area_px < 0.5 * min_area_px) continue;
+    const cv::Moments m = cv::moments(contour);
+    blob.features.centroid_px = {m.m10 / m.m00, m.m01 / m.m00};
+    if (box.x <= margin || box.y <= margin || box.x + box.width >= mask_.cols - margin ||
+        box.y + box.height >= mask_.rows - margin) {
+      blob.status = BlobStatus::kCutByBorder;
+      blob.contact_label = contour.front();
+      blob.features.area_mm2 = area_px * work_mm_per_px * work_mm_per_px;
+      result.blobs.push_back(blob);
+      continue;
+    }
+    blob = measure_blob(contour);
+    blob.contact_label = contour.front();  // a pixel of the blob, for the gap check below
+    if (blob.status == BlobStatus::kFillet && ++fillets > kMaxEstimatesPerFrame) {
+      blob.status = BlobStatus::kOverCapacity;
+    }
+    result.blobs.push_back(blob);
+  }
+  flag_close_blobs(result, work_mm_per_px);
+  return result;
+}
+
+void FilletEstimator::flag_close_blobs(FrameResult& result, double work_mm_per_px) {
+  // Blobs closer than min_gap_mm touch or nearly touch (their thin translucent rims may not
+  // segment as meat where they meet): dilating the mask by half the gap joins them.
+  std::size_t candidates = 0;
+  for (const auto& blob : result.blobs) candidates += blob.status == BlobStatus::kFillet ? 1 : 0;
+  if (candidates == 0 || result.blobs.size() < 2) return;
+  const int radius =
+      std::max(1, static_cast<int>(std::lround(0.5 * params_.min_gap_mm / work_mm_per_px)));
+  cv::dilate(
+      mask_, scratch_,
+      cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * radius + 1, 2 * radius + 1)));
+  cv::connectedComponents(scratch_, labels_, 8, CV_32S);
+  for (auto& blob : result.blobs) {
+    if (blob.status != BlobStatus::kFillet && blob.status != BlobStatus::kCutByBorder) continue;
+    const int label = labels_.at<int>(blob.contact_label);
+    for (const auto& other : result.blobs) {
+      if (&other == &blob ||
+          (other.status != BlobStatus::kFillet && other.status != BlobStatus::kCutByBorder)) {
+        continue;
+      }
+      if (labels_.at<int>(other.contact_label) == label && blob.status == BlobStatus::kFillet &&
+          blob.estimate.singulated) {
+        blob.estimate.singulated = false;
+        blob.estimate.hand = Hand::kUnknown;
+        blob.estimate.side = SideUp::kUnknown;
+        blob.features.touches_other_blob = true;
+        blob.estimate.confidence = 1.0F;  // a visible second blob within the gap is certain
+      }
+    }
+  }
+}
+
+BlobResult FilletEstimator::measure_blob(const std::vector<cv::Point>& contour) const {
+  BlobResult blob;
+  BlobFeatures& f = blob.features;
+  const double work_mm_per_px = calibration_.mm_per_px_at_centre() * downscale_;
+
+  // Contour to belt millimetres.
+  std::vector<cv::Point2f> contour_px(contour.begin(), contour.end());
+  std::vector<cv::Point2f> contour_mm;
+  if (calibration_.has_intrinsics) {
+    const double k = downscale_;
+    for (auto& p : contour_px) {
+      p = cv::Point2f(static_cast<float>(p.x * k + 0.5 * (k - 1)),
+                      static_cast<float>(p.y * k + 0.5 * (k - 1)));
+    }
+    std::vector<cv::Point2f> ideal;
+    cv::undistortPoints(contour_px, ideal, calibration_.camera_matrix, calibration_.distortion,
+                        cv::noArray(), calibration_.camera_matrix);
+    cv::perspectiveTransform(ideal, contour_mm, calibration_.image_to_belt);
+  } else {
+    cv::perspectiveTransform(contour_px, contour_mm, work_to_belt_);
+  }
+  const cv::Moments m = cv::moments(contour_mm);
+  f.area_mm2 = std::abs(m.m00);
+  const cv::Moments m_px = cv::moments(contour);
+  f.centroid_px = {m_px.m10 / m_px.m00, m_px.m01 / m_px.m00};
+  if (f.area_mm2 < params_.min_blob_area_mm2) {
+    blob.status = BlobStatus::kTooSmall;
+    return blob;
+  }
+  const double cx = m.m10 / m.m00;
+  const double cy = m.m01 / m.m00;
+  // Central moments normalised by the area (OpenCV's mu are sums over the polygon).
+  const double a = f.area_mm2;
+  const double mu20 = m.mu20 / a, mu11 = m.mu11 / a, mu02 = m.mu02 / a;
+  const double mu30 = m.mu30 / a, mu21 = m.mu21 / a, mu12 = m.mu12 / a, mu03 = m.mu03 / a;
+  double theta = 0.5 * std::atan2(2.0 * mu11, mu20 - mu02);
+  const auto skewness = [&](double angle, double& along, double& across) {
+    const double c = std::cos(angle), s = std::sin(angle);
+    const double var_u = c * c * mu20 + 2 * c * s * mu11 + s * s * mu02;
+    const double var_v = s * s * mu20 - 2 * c * s * mu11 + c * c * mu02;
+    const double m_uuu =
+        c * c * c * mu30 + 3 * c * c * s * mu21 + 3 * c * s * s * mu12 + s * s * s * mu03;
+    const double m_vvv =
+        -s * s * s * mu30 + 3 * s * s * c * mu21 - 3 * s * c * c * mu12 + c * c * c * mu03;
+    along = m_uuu / std::pow(std::max(var_u, 1e-12), 1.5);
+    across = m_vvv / std::pow(std::max(var_v, 1e-12), 1.5);
+  };
+  double along = 0.0, across = 0.0;
+  skewness(theta, along, across);
+  if (along < 0.0) {  // the long tail points at the tip
+    theta += std::numbers::pi;
+    along = -along;
+    across = -across;
+  }
+  f.axis_skewness = along;
+  f.bulge_skewness = across;
+  const bool bulge_left = across > 0.0;
+
+  // Singulation.
+  std::vector<int> hull_indices;
+  cv::convexHull(contour, hull_indices, false, false);
+  std::vector<cv::Point> hull;
+  for (int i : hull_indices) hull.push_back(contour[static_cast<std::size_t>(i)]);
+  const double hull_area = cv::contourArea(hull);
+  f.solidity = hull_area > 0.0 ? cv::contourArea(contour) / hull_area : 0.0;
+  if (hull_indices.size() > 3) {
+    std::vector<cv::Vec4i> defects;
+    std::sort(hull_indices.begin(), hull_indices.end());
+    cv::convexityDefects(contour, hull_indices, defects);
+    for (const auto& d : defects) {
+      f.max_defect_depth_mm = std::max(f.max_defect_depth_mm, d[3] / 256.0 * work_mm_per_px);
+    }
+  }
+  const double area_margin =
+      std::min((f.area_mm2 - params_.min_single_area_mm2) / (0.1 * params_.min_single_area_mm2),
+               (params_.max_single_area_mm2 - f.area_mm2) / (0.1 * params_.max_single_area_mm2));
+  const double solidity_margin = (f.solidity - params_.min_solidity) / 0.03;
+  const double defect_margin =
+      (params_.max_defect_depth_mm - f.max_defect_depth_mm) / (0.3 * params_.max_defect_depth_mm);
+  const double singulation_margin = std::min({area_margin, solidity_margin, defect_margin});
+  const bool singulated = singulation_margin > 0.0;
+
+  // Side: colour and texture over the blob's interior (eroded ~3 mm from the edge, where the
+  // translucent rim mixes in the belt colour).
+  const cv::Rect box = cv::boundingRect(contour);
+  cv::Mat interior(box.size(), CV_8UC1, cv::Scalar(0));
+  cv::drawContours(interior, std::vector<std::vector<cv::Point>>{contour}, 0, cv::Scalar(255),
+                   cv::FILLED, cv::LINE_8, cv::noArray(), 0, -box.tl());
+  const int erode_px = std::max(1, static_cast<int>(std::lround(3.0 / work_mm_per_px)));
+  cv::erode(
+      interior, interior,
+      cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * erode_px + 1, 2 * erode_px + 1)));
+  const cv::Scalar mean_bgr = cv::mean(work_bgr_(box), interior);
+  f.redness = mean_bgr[2] > 1.0 ? (mean_bgr[2] - mean_bgr[1]) / mean_bgr[2] : 0.0;
+  // Band-pass: detail between ~0.5 and ~1.5 mm; the fine blur suppresses per-pixel noise.
+  cv::Mat grey_box, fine, coarse;
+  grey_(box).convertTo(grey_box, CV_32F);
+  cv::GaussianBlur(grey_box, fine, cv::Size(0, 0), 0.7);
+  cv::GaussianBlur(grey_box, coarse, cv::Size(0, 0), 2.5);
+  cv::absdiff(fine, coarse, fine);
+  const double mean_grey = cv::mean(grey_box, interior)[0];
+  f.texture = mean_grey > 1.0 ? cv::mean(fine, interior)[0] / mean_grey : 0.0;
+  f.side_score = params_.w_redness * (f.redness - params_.redness_mid) / params_.redness_scale +
+                 params_.w_texture * (f.texture - params_.texture_mid) / params_.texture_scale;
+  const bool bone_up = f.side_score > 0.0;
+
+  FilletEstimate& e = blob.estimate;
+  e.x_mm = static_cast<float>(cx);
+  e.y_mm = static_cast<float>(cy);
+  e.singulated = singulated;
+  if (singulated) {
+    const double bulge_sign = bulge_left ? 1.0 : -1.0;
+    const double corrected = theta + bulge_sign * params_.axis_bias_rad;
+    e.angle_rad = wrap_angle(corrected);
+    // From the silhouette's area centroid to the fillet's volume centroid (shape model).
+    const double c = std::cos(corrected), s = std::sin(corrected);
+    const double offset_along = params_.pose_offset_along_mm;
+    const double toward_bulge = bulge_sign * params_.pose_offset_toward_bulge_mm;
+    e.x_mm = static_cast<float>(cx + c * offset_along - s * toward_bulge);
+    e.y_mm = static_cast<float>(cy + s * offset_along + c * toward_bulge);
+    e.side = bone_up ? SideUp::kBone : SideUp::kSkin;
+    e.hand = (bulge_left != bone_up) ? Hand::kLeft : Hand::kRight;
+    e.confidence = static_cast<float>(std::min(
+        {clamp01(along / params_.sure_thick_end_skewness),
+         clamp01(std::abs(across) / params_.sure_bulge_skewness),
+         clamp01(std::abs(f.side_score) / params_.sure_side_score), clamp01(singulation_margin)}));
+  } else {
+    e.angle_rad = wrap_angle(theta);
+    e.confidence = static_cast<float>(clamp01(-singulation_margin));
+  }
+  blob.status = BlobStatus::kFillet;
+  return blob;
+}
+
+}  // namespace fl::vision

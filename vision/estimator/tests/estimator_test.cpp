@@ -1,0 +1,185 @@
+// The estimator on rendered frames: pose, thick end, hand, side and singulation on clean and
+// disturbed frames. Tolerances: the 640 x 480 camera sees 0.47 mm per pixel; a 170 mm fillet's
+// axis from silhouette moments is good to a fraction of a degree, and the shape model's
+// corrections (axis bias, centroid offset) are fitted on the nominal mesh, so clean nominal
+// fillets must come out within 1.5 mm and 1.5 degrees (a few pixels and well inside the line's
+// 5 degree placement tolerance).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "render_support.hpp"
+
+namespace fl::vision {
+namespace {
+
+using testing::angle_difference_rad;
+using testing::camera_640;
+using testing::camera_line;
+using testing::exact_calibration;
+using testing::nearest_fillet;
+using testing::renderer;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+constexpr double kCleanPositionToleranceMm = 1.5;
+constexpr double kCleanAngleToleranceRad = 1.5 * kDeg;
+
+render::Scene one_fillet(double x_mm, double y_mm, double angle_rad, Hand hand, SideUp side,
+                         int size_variant = 1) {
+  render::Scene scene;
+  render::FilletInstance fillet;
+  fillet.x_mm = x_mm;
+  fillet.y_mm = y_mm;
+  fillet.angle_rad = angle_rad;
+  fillet.hand = hand;
+  fillet.side = side;
+  fillet.size_variant = size_variant;
+  scene.fillets = {fillet};
+  return scene;
+}
+
+void expect_matches(const FrameResult& result, const render::FilletTruth& truth,
+                    double position_tolerance_mm, double angle_tolerance_rad) {
+  ASSERT_EQ(result.status, FrameStatus::kOk) << result.message;
+  const auto blob = nearest_fillet(result, {truth.fillet.x_mm, truth.fillet.y_mm});
+  ASSERT_TRUE(blob.has_value()) << "no fillet near the truth";
+  const FilletEstimate& e = blob->estimate;
+  EXPECT_NEAR(e.x_mm, truth.fillet.x_mm, position_tolerance_mm);
+  EXPECT_NEAR(e.y_mm, truth.fillet.y_mm, position_tolerance_mm);
+  EXPECT_LT(angle_difference_rad(e.angle_rad, truth.fillet.angle_rad), angle_tolerance_rad)
+      << "estimated " << e.angle_rad << " truth " << truth.fillet.angle_rad;
+  EXPECT_GT(e.angle_rad, -std::numbers::pi);
+  EXPECT_LE(e.angle_rad, std::numbers::pi);
+  EXPECT_EQ(e.hand, truth.fillet.hand);
+  EXPECT_EQ(e.side, truth.fillet.side);
+  EXPECT_TRUE(e.singulated);
+  EXPECT_GE(e.confidence, 0.6F);  // line.yaml's min_confidence: a clean frame must pass it
+}
+
+// Full circle in 10 degree steps, every hand and side: the thick end is found (an error below
+// 90 degrees) and the angle within 1.5 degrees at every heading.
+TEST(FilletEstimator, CleanSweepOverTheFullCircle) {
+  const auto camera = camera_640();
+  FilletEstimator estimator(exact_calibration(camera));
+  for (const Hand hand : {Hand::kLeft, Hand::kRight}) {
+    for (const SideUp side : {SideUp::kSkin, SideUp::kBone}) {
+      for (int degrees = 0; degrees < 360; degrees += 10) {
+        SCOPED_TRACE("hand " + std::to_string(static_cast<int>(hand)) + " side " +
+                     std::to_string(static_cast<int>(side)) + " angle " + std::to_string(degrees));
+        const auto frame = renderer().render(
+            camera, one_fillet(6.0, -4.0, std::remainder(degrees * kDeg, 2 * std::numbers::pi),
+                               hand, side));
+        expect_matches(estimator.estimate(frame.bgr, 0, 0), frame.truth[0],
+                       kCleanPositionToleranceMm, kCleanAngleToleranceRad);
+      }
+    }
+  }
+}
+
+// Every table 3.1 size, at the line cameras' 1280 x 1024 (processed at half resolution).
+TEST(FilletEstimator, LineCameraResolutionAllSizes) {
+  const auto camera = camera_line();
+  FilletEstimator estimator(exact_calibration(camera));
+  EXPECT_EQ(estimator.downscale_factor(), 2);  // 0.234 mm/px -> 0.47 mm/px working
+  for (int size = 0; size < 3; ++size) {
+    const auto frame = renderer().render(
+        camera, one_fillet(-20.0, 10.0, 2.5 - size, size % 2 ? Hand::kLeft : Hand::kRight,
+                           size == 1 ? SideUp::kBone : SideUp::kSkin, size));
+    expect_matches(estimator.estimate(frame.bgr, 0, 0), frame.truth[0], kCleanPositionToleranceMm,
+                   kCleanAngleToleranceRad);
+  }
+}
+
+// Lighting and noise well beyond the evaluation's spread, one at a time: still right, within
+// 2 mm and 2 degrees (noise and blur shift edge pixels by a fraction of a pixel).
+TEST(FilletEstimator, RobustToLightingAndNoise) {
+  const auto camera = camera_640();
+  FilletEstimator estimator(exact_calibration(camera));
+  std::vector<render::ImagingConditions> conditions(7);
+  conditions[0].exposure_gain = 0.55;
+  conditions[1].exposure_gain = 1.4;
+  conditions[2].lighting_gradient = 0.5;
+  conditions[2].lighting_gradient_direction_rad = 0.7;
+  conditions[3].vignetting = 0.35;
+  conditions[4].motion_blur_px = 6.0;
+  conditions[5].noise_sigma = 10.0;
+  conditions[6].light_direction = {0.6, -0.5, 1.0};
+  for (std::size_t i = 0; i < conditions.size(); ++i) {
+    SCOPED_TRACE("condition " + std::to_string(i));
+    auto scene = one_fillet(-10.0, 8.0, -2.2, i % 2 ? Hand::kLeft : Hand::kRight,
+                            i % 3 ? SideUp::kSkin : SideUp::kBone);
+    scene.imaging = conditions[i];
+    scene.seed = 40 + i;
+    const auto frame = renderer().render(camera, scene);
+    expect_matches(estimator.estimate(frame.bgr, 0, 0), frame.truth[0], 2.0, 2.0 * kDeg);
+  }
+}
+
+// Touching pairs (side by side, same way or head to tail, contact overlap 0.5 .. 3 mm) are one
+// blob, or two blobs closer than the gap: every member is reported not singulated, with
+// unknown hand and side.
+TEST(FilletEstimator, TouchingPairsAreFlagged) {
+  const auto camera = camera_640();
+  FilletEstimator estimator(exact_calibration(camera));
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const auto scene = testing::random_scene(
+        camera, 300000 + seed,
+        {.touching_pair = true, .neighbours = false, .realistic = true, .nominal_shape = false});
+    ASSERT_EQ(scene.fillets.size(), 2U);
+    const auto frame = renderer().render(camera, scene);
+    const auto result = estimator.estimate(frame.bgr, 0, 0);
+    ASSERT_EQ(result.status, FrameStatus::kOk);
+    int fillet_blobs = 0;
+    for (const auto& blob : result.blobs) {
+      if (blob.status != BlobStatus::kFillet) continue;
+      ++fillet_blobs;
+      EXPECT_FALSE(blob.estimate.singulated) << "area " << blob.features.area_mm2;
+      EXPECT_EQ(blob.estimate.hand, Hand::kUnknown);
+      EXPECT_EQ(blob.estimate.side, SideUp::kUnknown);
+    }
+    EXPECT_GE(fillet_blobs, 1);
+  }
+}
+
+// A camera tilted 5 and 3 degrees (perspective) with its exact homography: the polygon moments
+// in belt millimetres keep the pose within 2 mm and 2 degrees.
+TEST(FilletEstimator, PerspectiveCamera) {
+  const cv::Matx33d k(900, 0, 320, 0, 900, 240, 0, 0, 1);
+  const auto camera = render::make_tilted_camera(640, 480, k, 700.0, 5.0 * kDeg, -3.0 * kDeg);
+  FilletEstimator estimator(exact_calibration(camera));
+  const auto frame =
+      renderer().render(camera, one_fillet(5.0, 0.0, 0.8, Hand::kRight, SideUp::kSkin));
+  ASSERT_TRUE(frame.truth[0].fully_visible);
+  expect_matches(estimator.estimate(frame.bgr, 0, 0), frame.truth[0], 2.0, 2.0 * kDeg);
+}
+
+// A white belt: the same chroma channel separates, with the belt chroma set for white.
+TEST(FilletEstimator, WhiteBelt) {
+  const auto camera = camera_640();
+  EstimatorParams params;
+  params.belt_chroma = 128.0;  // R == B
+  FilletEstimator estimator(exact_calibration(camera), params);
+  auto scene = one_fillet(0.0, 0.0, -0.4, Hand::kLeft, SideUp::kBone);
+  scene.belt.colour_bgr = {215.0, 215.0, 212.0};
+  scene.imaging.noise_sigma = 3.0;
+  const auto frame = renderer().render(camera, scene);
+  expect_matches(estimator.estimate(frame.bgr, 0, 0), frame.truth[0], 2.0, 2.0 * kDeg);
+}
+
+TEST(FilletEstimator, TimeAndSequencePassThrough) {
+  const auto camera = camera_640();
+  FilletEstimator estimator(exact_calibration(camera));
+  const auto frame =
+      renderer().render(camera, one_fillet(0.0, 0.0, 1.0, Hand::kLeft, SideUp::kSkin));
+  const auto result = estimator.estimate(frame.bgr, 123'456'789'000LL, 77U);
+  const CameraFrame camera_frame = result.to_camera_frame();
+  EXPECT_EQ(camera_frame.frame_time_ns, 123'456'789'000LL);
+  EXPECT_EQ(camera_frame.sequence, 77U);
+  ASSERT_EQ(camera_frame.count, 1);
+  EXPECT_TRUE(camera_frame.estimates[0].singulated);
+}
+
+}  // namespace
+}  // namespace fl::vision
