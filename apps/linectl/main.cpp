@@ -21,6 +21,7 @@
 #include "fl/controller/line_controller.hpp"
 #include "fl/controller/runtime.hpp"
 #include "fl/controller/yaml_reader.hpp"
+#include "fl/twin/dem_plant/dem_plant.hpp"
 #include "fl/twin/fast_plant.hpp"
 #include "fl/twin/fast_plant_config.hpp"
 #include "plant_io.hpp"
@@ -57,8 +58,11 @@ std::unique_ptr<Plant> make_plant(const RunArgs& args, const LineConfig& line) {
     return std::make_unique<FastPlant>(line, load_fast_plant_config(args.plant_config));
   }
   if (args.plant == "dem") {
-    throw std::runtime_error(
-        "--plant dem: the DEM twin is not part of this build yet (twin issue); use --plant fast");
+    // --plant-config names the fast plant's file by default: the DEM plant reads its own.
+    const std::filesystem::path file = args.plant_config == default_config("plant_fast.yaml")
+                                           ? default_config("plant_dem.yaml")
+                                           : std::filesystem::path(args.plant_config);
+    return std::make_unique<DemPlant>(line, load_dem_plant_config(file));
   }
   throw std::runtime_error("--plant " + args.plant + ": unknown plant (choose fast or dem)");
 }

@@ -1,0 +1,22 @@
+# DEM plant (issue 3, item 5): the DEM twin behind the controller's plant interface.
+# Library fl_twin_dem_plant, tests twin_dem_plant_tests. Included from twin/CMakeLists.txt.
+file(GLOB FL_TWIN_DEM_PLANT_SOURCES CONFIGURE_DEPENDS ${CMAKE_CURRENT_LIST_DIR}/src/dem_plant/*.cpp)
+if(NOT FL_TWIN_DEM_PLANT_SOURCES OR NOT TARGET fl_twin_dem OR NOT TARGET fl_twin_fast)
+  return()
+endif()
+add_library(fl_twin_dem_plant STATIC ${FL_TWIN_DEM_PLANT_SOURCES})
+target_include_directories(fl_twin_dem_plant PUBLIC ${CMAKE_CURRENT_LIST_DIR}/include)
+target_link_libraries(fl_twin_dem_plant PUBLIC fl_twin_dem fl_twin_fillet fl_twin_fast
+                                               fl_controller_config PRIVATE fl_build_flags)
+
+if(FL_BUILD_TESTS)
+  file(GLOB FL_TWIN_DEM_PLANT_TEST_SOURCES CONFIGURE_DEPENDS
+       ${CMAKE_CURRENT_LIST_DIR}/tests/dem_plant/*_test.cpp)
+  if(FL_TWIN_DEM_PLANT_TEST_SOURCES)
+    add_executable(twin_dem_plant_tests ${FL_TWIN_DEM_PLANT_TEST_SOURCES})
+    target_link_libraries(twin_dem_plant_tests PRIVATE fl_twin_dem_plant fl_closed_loop
+                                                       fl_build_flags GTest::gtest_main)
+    target_compile_definitions(twin_dem_plant_tests PRIVATE FL_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+    gtest_discover_tests(twin_dem_plant_tests DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300)
+  endif()
+endif()

@@ -1,0 +1,279 @@
+// The DEM plant: the line of thesis section 5.3 as a DEM digital twin behind the controller's
+// plant interface, so that `linectl run --plant dem` runs the controller unchanged.
+//
+// Fillets are bonded sphere meta-particles (fl/twin/dem/fillet_generator.hpp, six thesis
+// variants); the machinery is walls of the DEM engine, built from LineConfig. Engine frame
+// (metres): x = the line's s, y lateral (left > 0), z up, belts at z = 0.
+//
+// - Belts: one rectangle (two triangles) per product-path belt with the drive's actual speed
+//   as surface velocity; multilane units two side-by-side belts (left y > 0, right y < 0);
+//   small gaps between belts (see DemMachineryConfig). Drives ramp within their limits after
+//   the fast plant's 5 ms command delay and count encoder ticks as the fast plant's.
+// - Side walls along the whole line, guide rails funnelling over the guide belt.
+// - Flip plates: conveying surfaces at the guide belt's speed. Simplification: a retracted
+//   plate flips a fillet as an instantaneous rigid rotation of its spheres by 180 degrees
+//   about its centroid (plate 1 about the lateral axis, plate 2 about the travel axis) when
+//   the centroid crosses the plate; a plate in mid-travel flips by chance and throws the
+//   heading, as in the fast plant.
+// - Reject belt: reverses on command; the crate is a removal zone under its upstream edge.
+// - Centring pusher: a vertical plate; a stroke starts at the edge of the fillet at the unit
+//   (the real unit's light grid) and travels the commanded shift, pushing by contact.
+// - Squeeze roller: a cylinder mesh lowered onto the squeeze belt, rolling with it.
+// - Air knife: a removal zone around its position while it blows.
+// - Feeder (simplification of hopper, bulk belt and leveller): the hopper outflow fills a
+//   backlog counted in fillets (the level sensor reads it as heap height), and the running
+//   leveller places the next fillet (or touching pair) on the takt belt's upstream end when
+//   there is room, as the fast plant's levelled layer.
+// - Cameras: the fast plant's camera model (period, jitter, latency, noise, misses,
+//   misclassification, faults) on each fillet's ground-truth rigid pose (a least-squares fit
+//   of its spheres to its template).
+//
+// Determinism: one seed and one thread count give bit-identical input images.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "fl/controller/line_config.hpp"
+#include "fl/controller/plant.hpp"
+#include "fl/twin/dem/fillet_template.hpp"
+#include "fl/twin/dem/simulation.hpp"
+#include "fl/twin/dem_plant/dem_plant_config.hpp"
+#include "fl/twin/fast_plant.hpp"
+
+namespace fl {
+
+// Places a fillet directly on the line (tests, scenarios). s >= 0 counts as fed.
+struct DemFilletSpawn {
+  double s_mm = 0.0;
+  double y_mm = 0.0;
+  double angle_rad = 0.0;    // thick end to tip, CCW from travel
+  double v_mps = 0.0;        // along the line
+  std::uint8_t variant = 2;  // thesis_fillet_variants() index 0..5 (even: left, odd: right)
+  SideUp side = SideUp::kSkin;
+  bool touching_pair = false;  // a second fillet side by side (to the left), in contact
+};
+
+// Ground-truth pose of one fillet now (line coordinates).
+struct DemFilletView {
+  std::uint32_t plant_id = 0;
+  std::uint32_t group_id = 0;
+  Hand hand = Hand::kUnknown;
+  SideUp side = SideUp::kUnknown;
+  double s_mm = 0.0;
+  double y_mm = 0.0;
+  double z_mm = 0.0;  // centroid height over the belt plane
+  double angle_rad = 0.0;
+  double v_mps = 0.0;  // centroid speed along the line
+  double min_s_mm = 0.0;
+  double max_s_mm = 0.0;
+  bool fed = false;
+  bool touching = false;  // a sphere of it touches a sphere of another fillet
+  std::size_t spheres = 0;
+};
+
+struct DemPlantFaults {
+  std::array<bool, kDriveCount> drive_fault{};
+  std::array<FastCameraFaults, kCameraCount> cameras{};
+  bool estop_open = false;
+};
+
+struct DemPlantCounters {
+  std::uint64_t fillets_spawned = 0;
+  std::uint64_t fillets_fed = 0;
+  std::array<std::uint64_t, 4> exits{};  // by TrueExit
+  std::uint64_t exits_not_recorded = 0;
+  std::uint64_t unfed_losses = 0;
+  std::uint64_t flips = 0;
+  std::uint64_t misflips = 0;
+  std::uint64_t rebuilds = 0;  // engine rebuilt to take fillets out
+  std::uint64_t engine_steps = 0;
+  std::array<std::uint64_t, kCameraCount> frames_captured{};
+  std::array<std::uint64_t, kCameraCount> frames_published{};
+  std::array<std::uint64_t, kCameraCount> frames_dropped{};
+  std::array<std::uint64_t, kCameraCount> frames_superseded{};
+  std::array<std::uint64_t, kCameraCount> detections_truncated{};
+};
+
+class DemPlant final : public Plant {
+ public:
+  DemPlant(const LineConfig& line, const DemPlantConfig& config);
+  ~DemPlant() override;
+
+  [[nodiscard]] const char* name() const override { return "dem"; }
+  void reset(std::uint64_t seed, InputImage& in) override;
+  void step(const OutputImage& out, std::int64_t dt_ns, InputImage& in) override;
+  [[nodiscard]] std::span<const TrueFilletExit> drain_exits() override;
+  [[nodiscard]] std::uint64_t fillets_fed() const override { return counters_.fillets_fed; }
+  [[nodiscard]] std::uint64_t fillets_on_line() const override;
+
+  [[nodiscard]] DemPlantFaults& faults() { return faults_; }
+  std::optional<std::uint32_t> spawn_fillet(const DemFilletSpawn& spawn);
+
+  // Views for tests and tools (allocate).
+  [[nodiscard]] std::vector<DemFilletView> fillets() const;
+  [[nodiscard]] const dem::Simulation& simulation() const { return *sim_; }
+  [[nodiscard]] const DemPlantCounters& counters() const { return counters_; }
+  [[nodiscard]] double drive_speed_mps(DriveId drive) const {
+    return drives_[index(drive)].speed_mps;
+  }
+  [[nodiscard]] std::int64_t time_ns() const { return time_ns_; }
+  [[nodiscard]] const std::vector<dem::FilletTemplate>& templates() const { return templates_; }
+  [[nodiscard]] double engine_timestep_s() const;
+
+ private:
+  struct Fillet {
+    std::uint32_t plant_id = 0;
+    std::uint32_t group_id = 0;
+    std::uint8_t variant = 0;
+    std::uint32_t body = 0;      // engine body number
+    std::uint32_t first_id = 0;  // engine id of template sphere 0
+    std::uint32_t bond_begin = 0;
+    bool fed = false;
+    bool squeezed_ok = false;
+    bool thick_passed_roller = false;
+    bool remove = false;
+    // From the last particle pass.
+    Eigen::Vector3d centroid_m = Eigen::Vector3d::Zero();
+    Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
+    Eigen::Vector3d lower_m = Eigen::Vector3d::Zero();
+    Eigen::Vector3d upper_m = Eigen::Vector3d::Zero();
+    double previous_s_m = 0.0;
+    double progress_s_m = 0.0;
+    std::int64_t progress_ns = 0;
+    std::vector<std::uint32_t> particles;  // engine indices, valid until the next engine step
+  };
+  struct Pose {
+    double angle_rad = 0.0;
+    SideUp side = SideUp::kUnknown;
+    Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  };
+  struct DriveState {
+    double speed_mps = 0.0;
+    double position_mm = 0.0;
+    std::int64_t encoder_counts = 0;
+    bool ready = false;
+    bool fault = false;
+  };
+  struct Stations {
+    double plate1_travel = 0.0;
+    double plate2_travel = 0.0;
+    double pusher_mm = 0.0;
+    int pusher_side = 0;  // +1 pushes from the left (towards -y), -1 from the right, 0 parked
+    double pusher_edge_m = 0.0;  // fillet edge where the stroke began
+    double roller_travel = 0.0;
+    bool roller_pressing = false;
+    bool roller_went_down = false;
+    bool knife_blowing = false;
+  };
+  struct Infeed {
+    double hopper_opening_mm = 0.0;
+    double backlog_fillets = 0.0;
+    double leveller_rpm = 0.0;
+    double level_reading_mm = 0.0;
+  };
+  struct NextFeed {
+    std::uint8_t variant = 0;
+    bool pair = false;
+    SideUp side = SideUp::kSkin;
+    double y_mm = 0.0;
+    double angle_rad = 0.0;
+    double gap_mm = 0.0;
+  };
+  struct PendingFrame {
+    CameraFrame frame;
+    std::int64_t publish_ns = 0;
+    bool out_of_order = false;
+  };
+  static constexpr std::size_t kPendingFrames = 16;
+  struct CameraState {
+    std::int64_t next_nominal_ns = 0;
+    std::int64_t next_exposure_ns = 0;
+    std::uint32_t sequence = 0;
+    std::int64_t last_frame_time_ns = 0;
+    std::array<PendingFrame, kPendingFrames> pending{};
+    std::size_t pending_count = 0;
+  };
+  static constexpr std::size_t kCommandHistory = 16;
+  struct TimedCommand {
+    std::int64_t arrival_ns = 0;
+    OutputImage out{};
+  };
+
+  // dem_plant.cpp
+  void control_step(std::int64_t h_ns, const OutputImage& out);
+  const OutputImage& delayed_command(std::int64_t at_ns) const;
+  void write_image(InputImage& in);
+  void record_exit(const Fillet& fillet, TrueExit exit);
+  void take_out_removed();
+  void scan_particles();
+  [[nodiscard]] Pose fit_pose(const Fillet& fillet) const;
+  [[nodiscard]] bool touching(std::size_t f) const;
+  [[nodiscard]] bool beam_broken() const;
+  std::uint32_t add_fillet(std::uint8_t variant, SideUp side, const Eigen::Vector3d& centroid_m,
+                           double angle_rad, double v_mps, std::uint32_t group_id);
+  std::shared_ptr<const dem::Model> build_model() const;
+
+  // dem_machinery.cpp
+  void step_drives(double h_s, const OutputImage& delayed);
+  void step_stations(double h_s, const OutputImage& out);
+  void command_walls(double h_s);
+  void apply_events(const OutputImage& out);
+  void flip(Fillet& fillet, int plate);
+  [[nodiscard]] DriveId drive_under(double s_m) const;
+
+  // dem_feeder.cpp
+  void step_infeed(double h_s, const OutputImage& out);
+  void draw_next_feed();
+
+  // dem_cameras.cpp
+  void schedule_exposure(CameraId camera, bool first);
+  void capture_frames();
+  void capture(CameraId camera);
+  void publish_frames();
+
+  LineConfig line_;
+  DemPlantConfig config_;
+  std::vector<dem::FilletTemplate> templates_;
+  std::vector<std::vector<dem::BodyBond>> template_bonds_;
+  std::shared_ptr<const dem::Model> model_;
+  std::unique_ptr<dem::Simulation> sim_;
+  std::vector<std::size_t> wall_belt_;  // per drive: engine wall index of its belt, or npos
+  std::size_t wall_plate1_ = 0, wall_plate2_ = 0, wall_pusher_ = 0, wall_roller_ = 0,
+              wall_right_ml1_ = 0, wall_right_ml2_ = 0;
+
+  DemPlantFaults faults_{};
+  DemPlantCounters counters_{};
+  std::int64_t time_ns_ = 0;
+  std::int64_t step_ns_ = 1000000;
+  std::int64_t drive_delay_ns_ = 5000000;
+  std::array<DriveState, kDriveCount> drives_{};
+  Stations stations_{};
+  Infeed infeed_{};
+  NextFeed next_feed_{};
+  std::vector<Fillet> fillets_;
+  std::vector<std::int32_t> fillet_of_body_;
+  std::vector<TrueFilletExit> exits_;
+  std::size_t exit_count_ = 0;
+  std::size_t exits_drained_ = 0;
+  std::array<CameraState, kCameraCount> cameras_{};
+  std::array<TimedCommand, kCommandHistory> commands_{};
+  std::size_t command_head_ = 0;
+  std::size_t command_count_ = 0;
+  OutputImage idle_command_{};
+  bool beam_ = false;
+
+  FastRng feed_rng_;
+  FastRng body_rng_;
+  FastRng sensor_rng_;
+  std::array<FastRng, kCameraCount> camera_rngs_{};
+  std::uint32_t last_plant_id_ = 0;
+  std::uint32_t last_group_id_ = 0;
+  InputImage image_{};
+};
+
+}  // namespace fl

@@ -1,0 +1,99 @@
+// Configuration of the DEM plant (DemPlant): what the DEM twin needs beyond the line
+// configuration. Plain data with defaults; config/plant_dem.yaml holds the same values and
+// load_dem_plant_config() reads it strictly (fl::YamlReader).
+//
+// Two parts come from other files on purpose, so that the twins cannot drift apart:
+// - the DEM engine's materials, laws and solver settings (config/dem.yaml, thesis appendix B);
+// - the cameras, the levelled layer on the takt belt, the hopper and leveller, and the drive
+//   delay (config/plant_fast.yaml): the DEM plant's sensors behave as the fast plant's.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+
+#include "fl/twin/dem/model.hpp"
+#include "fl/twin/fast_plant_config.hpp"
+
+namespace fl {
+
+struct DemSimulationConfig {
+  // Thesis 3.3: 3..7 mm; 4 mm was the thesis' choice, 7 mm runs about 6x faster (fewer and
+  // larger spheres, a longer Rayleigh step).
+  float sub_particle_radius_mm = 7.0F;
+  // Timestep as a share of the sub-particle's Rayleigh time (appendix B: 15 %).
+  float rayleigh_fraction = 0.15F;
+  // Verlet skin: a larger skin rebuilds the neighbour list less often on the moving belts
+  // (every skin/2 of travel) at the price of longer lists.
+  float neighbor_skin_mm = 4.0F;
+  int thread_count = 2;  // results are bit-identical for a fixed count
+  // Machine commands, events and camera exposures are resolved at this step (the fast plant's
+  // 1 ms); the engine runs its own, shorter steps in between.
+  float control_step_s = 0.001F;
+  std::uint32_t max_fillets = 64;  // a limit, not an allocation: the 6 m line holds about 20
+  std::uint32_t exit_capacity = 1024;
+  bool operator==(const DemSimulationConfig&) const = default;
+};
+
+struct DemMachineryConfig {
+  float belt_half_width_mm = 200.0F;  // 400 mm belts, the fast plant's
+  // Gaps between consecutive belts and between the two belts of a multilane unit: coplanar
+  // meshes that touch would both report the same edge contact (double support at the seam).
+  float belt_gap_mm = 2.0F;
+  float multilane_gap_mm = 2.0F;
+  float side_wall_height_mm = 100.0F;  // keeps fillets on the belts
+  // Guide rails: from the belt edges to a channel of +-this, over the funnel length.
+  float rail_channel_half_width_mm = 100.0F;  // wider than the longest fillet: nothing jams
+  float rail_funnel_length_mm = 500.0F;
+  float rail_height_mm = 80.0F;
+  // Centring pusher: a vertical plate along the travel direction.
+  float pusher_half_length_mm = 100.0F;
+  float pusher_height_mm = 60.0F;
+  float pusher_window_half_mm = 60.0F;  // the fillet it strokes against, around the unit
+  // Squeeze roller: a cylinder across the belt; bottom this high above the belt when up / down.
+  float roller_radius_mm = 40.0F;
+  float roller_up_gap_mm = 80.0F;
+  float roller_down_gap_mm = 25.0F;
+  int roller_segments = 24;
+  // Height of the takt laser beam over the belt.
+  float beam_height_mm = 10.0F;
+  bool operator==(const DemMachineryConfig&) const = default;
+};
+
+struct DemLossConfig {
+  float fell_below_mm = -50.0F;  // centroid under this height: fell between or off the belts
+  // A fed fillet that does not advance stuck_progress_mm in stuck_after_s over a running belt
+  // is taken off as stuck (a plant-side loss, as in the fast plant).
+  float stuck_after_s = 10.0F;
+  float stuck_progress_mm = 10.0F;
+  // Reject crate: a fillet carried back by the reversing reject belt falls in once its rear is
+  // this far upstream of the belt's upstream edge.
+  float crate_overhang_mm = 30.0F;
+  bool operator==(const DemLossConfig&) const = default;
+};
+
+struct DemFeederConfig {
+  float spawn_lift_mm = 2.0F;  // a new fillet is placed this high over the takt belt
+  bool operator==(const DemFeederConfig&) const = default;
+};
+
+struct DemPlantConfig {
+  DemSimulationConfig simulation;
+  DemMachineryConfig machinery;
+  DemLossConfig losses;
+  DemFeederConfig feeder;
+  // config/plant_fast.yaml: cameras, infeed (hopper, leveller, levelled layer), fillet pair
+  // probability, drive delay, flip misflip throw, centring and air-knife windows.
+  FastPlantConfig shared;
+  // config/dem.yaml: materials, types (fillet_a, fillet_b, equipment) and laws; the plant
+  // sets timestep, domain, skin, threads and walls.
+  dem::ModelSpec engine;
+};
+
+// Defaults: the structs' defaults, the fast plant's defaults and the thesis' appendix B model.
+DemPlantConfig default_dem_plant_config();
+
+// Reads config/plant_dem.yaml strictly, and the two files it names (relative to its folder).
+// Throws ConfigError listing every problem with file, key and line.
+DemPlantConfig load_dem_plant_config(const std::filesystem::path& file);
+
+}  // namespace fl

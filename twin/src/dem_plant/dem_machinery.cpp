@@ -1,0 +1,254 @@
+// Machinery of the DEM plant: drives (ramps, encoders), station actuators, the walls they
+// move, and the events a fillet meets (feeding across the barrier, flips, squeeze, exits).
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "fl/twin/dem_plant/dem_plant.hpp"
+
+namespace fl {
+namespace {
+
+using dem::Vec3;
+constexpr double kMm = 1e-3;
+
+double approach(double value, double target, double max_step) {
+  if (value < target) return std::min(value + max_step, target);
+  return std::max(value - max_step, target);
+}
+
+// A wall jump larger than this is placed directly instead of moved (park <-> stroke start).
+constexpr double kTeleportM = 0.005;
+
+}  // namespace
+
+void DemPlant::step_drives(double h_s, const OutputImage& delayed) {
+  // As the fast plant: ramp within the drive's limits after the command delay, encoder counts
+  // from the integrated travel; the safety chain stops every drive.
+  const bool powered = !faults_.estop_open;
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    DriveState& drive = drives_[d];
+    const DriveLimits& limits = line_.limits[d];
+    const DriveCommand& command = delayed.drives[d];
+    drive.fault = faults_.drive_fault[d];
+    const bool enabled = powered && command.enable && !drive.fault;
+    double target_mps = 0.0;
+    double accel_mps2 = limits.max_accel_mps2;
+    if (enabled) {
+      const double max_speed_mps = limits.max_speed_mps;
+      target_mps =
+          std::clamp(static_cast<double>(command.speed_mps), -max_speed_mps, max_speed_mps);
+      if (command.accel_mps2 > 0.0F) {
+        accel_mps2 = std::min(static_cast<double>(command.accel_mps2), accel_mps2);
+      }
+    }
+    const double old_mps = drive.speed_mps;
+    drive.speed_mps = approach(old_mps, target_mps, accel_mps2 * h_s);
+    drive.position_mm += 0.5 * (old_mps + drive.speed_mps) * h_s * 1000.0;
+    drive.encoder_counts =
+        static_cast<std::int64_t>(std::floor(drive.position_mm * limits.counts_per_mm));
+    drive.ready = enabled;
+  }
+}
+
+void DemPlant::step_stations(double h_s, const OutputImage& out) {
+  Stations& st = stations_;
+  const double plate_rate = h_s / std::max(static_cast<double>(line_.flip.actuation_s), 1e-6);
+  st.plate1_travel = approach(st.plate1_travel, out.flip_plate1_flip ? 1.0 : 0.0, plate_rate);
+  st.plate2_travel = approach(st.plate2_travel, out.flip_plate2_flip ? 1.0 : 0.0, plate_rate);
+
+  // Centring pusher: a stroke engages at the edge of the fillet at the unit and travels the
+  // commanded shift; it parks when the stroke ends and the pusher is back.
+  const double max_shift_mm = line_.centring.max_shift_mm;
+  const double shift_mm =
+      std::clamp(static_cast<double>(out.centring_shift_mm), -max_shift_mm, max_shift_mm);
+  if (out.centring_stroke && st.pusher_side == 0 && std::abs(shift_mm) > 0.0) {
+    const double cs_m = line_.centring.s_mm * kMm;
+    const double window_m = config_.machinery.pusher_window_half_mm * kMm;
+    const Fillet* nearest = nullptr;
+    for (const Fillet& f : fillets_) {
+      const double from_m = std::abs(f.centroid_m.x() - cs_m);
+      if (from_m <= window_m &&
+          (nearest == nullptr || from_m < std::abs(nearest->centroid_m.x() - cs_m))) {
+        nearest = &f;
+      }
+    }
+    if (nearest != nullptr) {
+      st.pusher_side = shift_mm < 0.0 ? 1 : -1;
+      st.pusher_edge_m = st.pusher_side > 0 ? nearest->upper_m.y() : nearest->lower_m.y();
+    }
+  }
+  const double pusher_target_mm = out.centring_stroke && st.pusher_side != 0 ? shift_mm : 0.0;
+  const double pusher_speed_mmps =
+      max_shift_mm / std::max(static_cast<double>(line_.centring.stroke_time_s), 1e-6);
+  st.pusher_mm = approach(st.pusher_mm, pusher_target_mm, pusher_speed_mmps * h_s);
+  if (!out.centring_stroke && st.pusher_mm == 0.0) st.pusher_side = 0;
+
+  const double roller_rate = h_s / std::max(static_cast<double>(line_.squeeze.actuation_s), 1e-6);
+  st.roller_travel = approach(st.roller_travel, out.squeeze_roller_down ? 1.0 : 0.0, roller_rate);
+  const bool was_pressing = st.roller_pressing;
+  st.roller_pressing =
+      st.roller_travel >= static_cast<double>(config_.shared.squeeze.contact_fraction);
+  st.roller_went_down = st.roller_pressing && !was_pressing;
+  st.knife_blowing = out.final_reject;  // solenoid and air: immediate against the 10 ms scan
+}
+
+void DemPlant::command_walls(double h_s) {
+  dem::State& s = sim_->mutable_state();
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    if (wall_belt_[d] == static_cast<std::size_t>(-1)) continue;
+    s.walls[wall_belt_[d]].surface_velocity_m_per_s = Vec3(drives_[d].speed_mps, 0.0, 0.0);
+  }
+  const double guide_mps = drives_[index(DriveId::kGuide)].speed_mps;
+  s.walls[wall_plate1_].surface_velocity_m_per_s = Vec3(guide_mps, 0.0, 0.0);
+  s.walls[wall_plate2_].surface_velocity_m_per_s = Vec3(guide_mps, 0.0, 0.0);
+
+  bool teleported = false;
+  // Kinematic walls: the velocity that lands on the target at the control step's end.
+  auto drive_wall = [&](dem::WallState& wall, const Vec3& target_m) {
+    const Vec3 delta = target_m - wall.translation_m;
+    if (delta.norm() > kTeleportM) {
+      wall.translation_m = target_m;
+      wall.linear_velocity_m_per_s.setZero();
+      teleported = true;
+    } else {
+      wall.linear_velocity_m_per_s = delta / h_s;
+    }
+  };
+  const DemMachineryConfig& m = config_.machinery;
+  const Stations& st = stations_;
+  const double park_m = m.belt_half_width_mm * kMm + 0.15;
+  const double pusher_y_m = st.pusher_side == 0 ? park_m : st.pusher_edge_m + st.pusher_mm * kMm;
+  drive_wall(s.walls[wall_pusher_], Vec3(0.0, pusher_y_m, 0.0));
+  const double drop_m = (m.roller_up_gap_mm - m.roller_down_gap_mm) * kMm;
+  dem::WallState& roller = s.walls[wall_roller_];
+  drive_wall(roller, Vec3(0.0, 0.0, -drop_m * st.roller_travel));
+  // Rolling with the squeeze belt: the bottom line moves at the belt's speed.
+  roller.angular_velocity_rad_per_s =
+      Vec3(0.0, -drives_[index(DriveId::kSqueeze)].speed_mps / (m.roller_radius_mm * kMm), 0.0);
+  if (teleported) sim_->prepare();  // new wall geometry without a motion step
+}
+
+DriveId DemPlant::drive_under(double s_m) const {
+  const double s_mm = s_m / kMm;
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    const BeltSection& section = line_.sections[d];
+    if (section.end_mm > section.start_mm && s_mm >= section.start_mm && s_mm < section.end_mm) {
+      return static_cast<DriveId>(d);
+    }
+  }
+  return DriveId::kGuide;  // the plates convey at the guide's speed
+}
+
+void DemPlant::flip(Fillet& fillet, int plate) {
+  // Simplification (see the header): a retracted plate turns the fillet over in one go, a
+  // rigid rotation by pi about its centroid: plate 1 about the lateral axis (end over end, the
+  // heading a becomes pi - a), plate 2 about the travel axis (sideways, a becomes -a). Its
+  // lowest point stays where it was; the spheres keep the fillet's mean velocity, spins stop.
+  dem::State& s = sim_->mutable_state();
+  const Vec3 axis = plate == 1 ? Vec3::UnitY() : Vec3::UnitX();
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(std::numbers::pi, axis).toRotationMatrix();
+  double low_before = 1e9;
+  double low_after = 1e9;
+  for (const std::uint32_t k : fillet.particles) {
+    low_before = std::min(low_before, s.position_m[k].z() - s.radius_m[k]);
+    s.position_m[k] = fillet.centroid_m + turn * (s.position_m[k] - fillet.centroid_m);
+    low_after = std::min(low_after, s.position_m[k].z() - s.radius_m[k]);
+  }
+  for (const std::uint32_t k : fillet.particles) {
+    s.position_m[k].z() += low_before - low_after;
+    s.velocity_m_per_s[k] = fillet.velocity_mps;
+    s.angular_velocity_rad_per_s[k].setZero();
+  }
+  ++counters_.flips;
+}
+
+void DemPlant::apply_events(const OutputImage& out) {
+  (void)out;
+  const double plate1_m = line_.flip.plate1_s_mm * kMm;
+  const double plate2_m = line_.flip.plate2_s_mm * kMm;
+  const double roller_m = line_.squeeze.roller_s_mm * kMm;
+  const double knife_m = line_.tolerance.final_reject_s_mm * kMm;
+  const double knife_window_m = config_.shared.final_reject.window_half_mm * kMm;
+  const double reject_start_m = line_.sections[index(DriveId::kReject)].start_mm * kMm;
+  const double reject_end_m = line_.sections[index(DriveId::kReject)].end_mm * kMm;
+  const double reject_mps = drives_[index(DriveId::kReject)].speed_mps;
+  const double placed_m = line_.placed_at_s_mm * kMm;
+  const DemLossConfig& losses = config_.losses;
+  const double half_w = config_.machinery.belt_half_width_mm * kMm;
+  bool moved = false;
+  for (Fillet& f : fillets_) {
+    if (f.particles.empty()) continue;
+    const double s_m = f.centroid_m.x();
+    if (!f.fed && s_m >= 0.0) {
+      f.fed = true;
+      ++counters_.fillets_fed;
+    }
+    for (int plate = 1; plate <= 2; ++plate) {
+      const double plate_m = plate == 1 ? plate1_m : plate2_m;
+      if (!(f.previous_s_m < plate_m && s_m >= plate_m)) continue;
+      const double travel = plate == 1 ? stations_.plate1_travel : stations_.plate2_travel;
+      bool do_flip = travel >= 1.0;
+      if (travel > 0.0 && travel < 1.0) {
+        // Plate in mid-travel: flips or not by chance and throws the heading (fast plant).
+        ++counters_.misflips;
+        do_flip = body_rng_.bernoulli(travel);
+        const double throw_rad = config_.shared.flip.misflip_angle_rad;
+        const Eigen::Matrix3d yaw =
+            Eigen::AngleAxisd(body_rng_.uniform(-throw_rad, throw_rad), Vec3::UnitZ())
+                .toRotationMatrix();
+        dem::State& s = sim_->mutable_state();
+        for (const std::uint32_t k : f.particles) {
+          s.position_m[k] = f.centroid_m + yaw * (s.position_m[k] - f.centroid_m);
+        }
+        moved = true;
+      }
+      if (do_flip) {
+        flip(f, plate);
+        moved = true;
+      }
+    }
+    // Squeeze roller (thesis 6.2): lowered behind the thickest section is a good squeeze.
+    if (std::abs(s_m - roller_m) < 0.25) {
+      const Pose pose = fit_pose(f);
+      const double length_m = 2.0 * templates_[f.variant].half_extent_m.x();
+      // Thickest section at 0.3 of the length from the thick end (-x): body x = -0.2 L.
+      const double thick_m = s_m - 0.2 * length_m * pose.rotation(0, 0);
+      if (!f.thick_passed_roller && thick_m >= roller_m) f.thick_passed_roller = true;
+      if (stations_.roller_went_down && f.thick_passed_roller && f.lower_m.x() < roller_m &&
+          f.upper_m.x() > roller_m) {
+        f.squeezed_ok = true;
+      }
+    }
+    // Progress for the stuck check.
+    if (s_m > f.progress_s_m + losses.stuck_progress_mm * kMm) {
+      f.progress_s_m = s_m;
+      f.progress_ns = time_ns_;
+    }
+    const bool belt_runs = std::abs(drives_[index(drive_under(s_m))].speed_mps) > 0.05;
+    if (!belt_runs) f.progress_ns = time_ns_;  // a held belt is not a stuck fillet
+    // Exits.
+    if (stations_.knife_blowing && std::abs(s_m - knife_m) <= knife_window_m) {
+      record_exit(f, TrueExit::kFinalReject);
+      f.remove = true;
+    } else if (reject_mps < 0.0 && f.velocity_mps.x() < 0.0 && s_m < reject_end_m &&
+               f.lower_m.x() < reject_start_m - losses.crate_overhang_mm * kMm) {
+      record_exit(f, TrueExit::kRejectCrate);
+      f.remove = true;
+    } else if (s_m >= placed_m) {
+      record_exit(f, TrueExit::kOutfeed);
+      f.remove = true;
+    } else if (f.centroid_m.z() < losses.fell_below_mm * kMm ||
+               std::abs(f.centroid_m.y()) > half_w + 0.05 ||
+               (f.fed && static_cast<double>(time_ns_ - f.progress_ns) * 1e-9 >
+                             static_cast<double>(losses.stuck_after_s))) {
+      record_exit(f, TrueExit::kFellOff);
+      f.remove = true;
+    }
+    f.previous_s_m = s_m;
+  }
+  if (moved) sim_->prepare();
+  take_out_removed();
+}
+
+}  // namespace fl

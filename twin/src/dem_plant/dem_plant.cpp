@@ -1,0 +1,600 @@
+// DemPlant: construction (fillet templates, the engine model with the machinery as walls),
+// reset, the step loop, the particle pass, rigid poses, exits and taking fillets out.
+#include "fl/twin/dem_plant/dem_plant.hpp"
+
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <stdexcept>
+
+#include "dem_templates.hpp"
+
+namespace fl {
+namespace {
+
+using dem::Vec3;
+
+std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t stream) {
+  std::uint64_t z = seed ^ (stream * 0xD1B54A32D192ED03ULL);
+  z = (z ^ (z >> 30U)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27U)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31U);
+}
+
+std::int64_t to_ns(double seconds) { return std::llround(seconds * 1e9); }
+constexpr double kMm = 1e-3;
+
+// A rectangle as two triangles (corners in order around it).
+void add_quad(dem::MeshWallSpec& mesh, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  mesh.triangles.push_back({{a, b, c}});
+  mesh.triangles.push_back({{a, c, d}});
+}
+
+dem::MeshWallSpec belt_rect(std::string name, std::uint32_t type, double x0, double x1, double y0,
+                            double y1) {
+  dem::MeshWallSpec mesh{std::move(name), type, {}};
+  add_quad(mesh, Vec3(x0, y0, 0.0), Vec3(x1, y0, 0.0), Vec3(x1, y1, 0.0), Vec3(x0, y1, 0.0));
+  return mesh;
+}
+
+// A vertical wall along the segment (x0, y0) -> (x1, y1) from z0 to z1.
+void add_fence(dem::MeshWallSpec& mesh, double x0, double y0, double x1, double y1, double z0,
+               double z1) {
+  add_quad(mesh, Vec3(x0, y0, z0), Vec3(x1, y1, z0), Vec3(x1, y1, z1), Vec3(x0, y0, z1));
+}
+
+}  // namespace
+
+std::shared_ptr<const dem::Model> DemPlant::build_model() const {
+  dem::ModelSpec spec = config_.engine;
+  const auto equipment = [&]() -> std::uint32_t {
+    for (std::uint32_t t = 0; t < spec.types.size(); ++t) {
+      if (spec.types[t].name == "equipment") return t;
+    }
+    throw std::invalid_argument("dem plant: the engine model has no type 'equipment'");
+  }();
+  if (spec.types.size() < 2 || spec.types[dem::kFilletTypeA].name != "fillet_a" ||
+      spec.types[dem::kFilletTypeB].name != "fillet_b") {
+    throw std::invalid_argument("dem plant: engine types 0 and 1 must be fillet_a and fillet_b");
+  }
+  const double radius_m = config_.simulation.sub_particle_radius_mm * kMm;
+  const dem::Material& fillet = spec.materials[spec.types[dem::kFilletTypeA].material];
+  spec.timestep_s = config_.simulation.rayleigh_fraction *
+                    dem::rayleigh_time_s(radius_m, fillet.density_kg_per_m3,
+                                         fillet.youngs_modulus_pa, fillet.poisson_ratio);
+  spec.neighbor_skin_m = config_.simulation.neighbor_skin_mm * kMm;
+  spec.thread_count = config_.simulation.thread_count;
+  spec.planes.clear();  // planes are infinite: the line is built of finite meshes only
+  spec.meshes.clear();
+
+  const DemMachineryConfig& m = config_.machinery;
+  const double half_w = m.belt_half_width_mm * kMm;
+  const double gap = 0.5 * m.belt_gap_mm * kMm;
+  const double start_m = -static_cast<double>(line_.takt_belt_length_mm) * kMm;
+  const double end_m = line_.placed_at_s_mm * kMm;
+  spec.domain.lower_m = Vec3(start_m - 0.2, -half_w - 0.3, -0.2);
+  spec.domain.upper_m = Vec3(end_m + 0.3, half_w + 0.3, 0.4);
+
+  auto self = const_cast<DemPlant*>(this);  // wall indices are recorded with the model
+  self->wall_belt_.assign(kDriveCount, static_cast<std::size_t>(-1));
+  const double ml_gap = 0.5 * m.multilane_gap_mm * kMm;
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    const auto id = static_cast<DriveId>(d);
+    if (id == DriveId::kBulk || id == DriveId::kMultilane1Right ||
+        id == DriveId::kMultilane2Right) {
+      continue;
+    }
+    const BeltSection& section = line_.sections[d];
+    if (!(section.end_mm > section.start_mm)) continue;
+    const double x0 = section.start_mm * kMm + (id == DriveId::kTakt ? 0.0 : gap);
+    const double x1 = section.end_mm * kMm - (id == DriveId::kOutfeed ? 0.0 : gap);
+    if (id == DriveId::kMultilane1Left || id == DriveId::kMultilane2Left) {
+      const DriveId right =
+          id == DriveId::kMultilane1Left ? DriveId::kMultilane1Right : DriveId::kMultilane2Right;
+      self->wall_belt_[d] = spec.meshes.size();
+      spec.meshes.push_back(
+          belt_rect("belt_left_" + std::to_string(d), equipment, x0, x1, ml_gap, half_w));
+      self->wall_belt_[index(right)] = spec.meshes.size();
+      spec.meshes.push_back(
+          belt_rect("belt_right_" + std::to_string(d), equipment, x0, x1, -half_w, -ml_gap));
+      continue;
+    }
+    self->wall_belt_[d] = spec.meshes.size();
+    spec.meshes.push_back(
+        belt_rect("belt_" + std::to_string(d), equipment, x0, x1, -half_w, half_w));
+  }
+  // Flip plates: conveying surfaces between guide and reject belt (see the header).
+  const double plates_start = line_.sections[index(DriveId::kGuide)].end_mm * kMm;
+  const double plates_end = line_.sections[index(DriveId::kReject)].start_mm * kMm;
+  const double plates_mid = 0.5 * (plates_start + plates_end);
+  self->wall_plate1_ = spec.meshes.size();
+  spec.meshes.push_back(
+      belt_rect("flip_plate1", equipment, plates_start + gap, plates_mid - gap, -half_w, half_w));
+  self->wall_plate2_ = spec.meshes.size();
+  spec.meshes.push_back(
+      belt_rect("flip_plate2", equipment, plates_mid + gap, plates_end - gap, -half_w, half_w));
+
+  // Side walls along the whole line and an end wall behind the takt belt.
+  {
+    dem::MeshWallSpec walls{"side_walls", equipment, {}};
+    const double h = m.side_wall_height_mm * kMm;
+    add_fence(walls, start_m, half_w, end_m + 0.1, half_w, 0.0, h);
+    add_fence(walls, start_m, -half_w, end_m + 0.1, -half_w, 0.0, h);
+    add_fence(walls, start_m, -half_w, start_m, half_w, 0.0, h);
+    spec.meshes.push_back(std::move(walls));
+  }
+  // Guide rails: funnel from the belt edges to the channel, then straight to the guide's end.
+  {
+    dem::MeshWallSpec rails{"guide_rails", equipment, {}};
+    const double g0 = line_.sections[index(DriveId::kGuide)].start_mm * kMm;
+    const double g1 = line_.sections[index(DriveId::kGuide)].end_mm * kMm;
+    const double funnel_end = std::min(g1, g0 + m.rail_funnel_length_mm * kMm);
+    const double channel = m.rail_channel_half_width_mm * kMm;
+    const double h = m.rail_height_mm * kMm;
+    for (const double sign : {1.0, -1.0}) {
+      add_fence(rails, g0, sign * half_w, funnel_end, sign * channel, 0.0, h);
+      add_fence(rails, funnel_end, sign * channel, g1, sign * channel, 0.0, h);
+    }
+    spec.meshes.push_back(std::move(rails));
+  }
+  // Centring pusher: a plate in the x-z plane at y = 0, moved sideways by its wall state.
+  {
+    dem::MeshWallSpec pusher{"centring_pusher", equipment, {}};
+    const double cs = line_.centring.s_mm * kMm;
+    const double half_len = m.pusher_half_length_mm * kMm;
+    add_fence(pusher, cs - half_len, 0.0, cs + half_len, 0.0, 0.002,
+              0.002 + m.pusher_height_mm * kMm);
+    self->wall_pusher_ = spec.meshes.size();
+    spec.meshes.push_back(std::move(pusher));
+  }
+  // Squeeze roller: the lateral surface of a cylinder across the belt (axis along y).
+  {
+    dem::MeshWallSpec roller{"squeeze_roller", equipment, {}};
+    const double rs = line_.squeeze.roller_s_mm * kMm;
+    const double r = m.roller_radius_mm * kMm;
+    const double zc = m.roller_up_gap_mm * kMm + r;
+    const int n = m.roller_segments;
+    for (int k = 0; k < n; ++k) {
+      const double a0 = 2.0 * std::numbers::pi * k / n;
+      const double a1 = 2.0 * std::numbers::pi * (k + 1) / n;
+      const Vec3 p0(rs + r * std::sin(a0), 0.0, zc - r * std::cos(a0));
+      const Vec3 p1(rs + r * std::sin(a1), 0.0, zc - r * std::cos(a1));
+      const Vec3 side(0.0, half_w, 0.0);
+      add_quad(roller, p0 - side, p1 - side, p1 + side, p0 + side);
+    }
+    self->wall_roller_ = spec.meshes.size();
+    spec.meshes.push_back(std::move(roller));
+  }
+  return std::make_shared<const dem::Model>(std::move(spec));
+}
+
+DemPlant::DemPlant(const LineConfig& line, const DemPlantConfig& config)
+    : line_(line), config_(config) {
+  if (config_.simulation.max_fillets == 0) throw std::invalid_argument("max_fillets must be > 0");
+  step_ns_ = std::max<std::int64_t>(1, to_ns(config_.simulation.control_step_s));
+  drive_delay_ns_ = std::max<std::int64_t>(0, to_ns(config_.shared.belts.drive_delay_s));
+  templates_ = dem_plant_detail::make_templates(config_.simulation.sub_particle_radius_mm * kMm);
+  for (const dem::FilletTemplate& t : templates_) {
+    std::vector<dem::BodyBond> bonds;
+    bonds.reserve(t.bonds.size());
+    for (const dem::FilletBond& b : t.bonds) bonds.push_back({b.i, b.j, b.contact_radius_m});
+    template_bonds_.push_back(std::move(bonds));
+  }
+  model_ = build_model();
+  exits_.resize(std::max<std::size_t>(config_.simulation.exit_capacity, 1));
+  InputImage scratch{};
+  reset(0, scratch);
+}
+
+DemPlant::~DemPlant() = default;
+
+double DemPlant::engine_timestep_s() const { return model_->spec().timestep_s; }
+
+void DemPlant::reset(std::uint64_t seed, InputImage& in) {
+  sim_ = std::make_unique<dem::Simulation>(model_);
+  dem::State& state = sim_->mutable_state();
+  const DemMachineryConfig& m = config_.machinery;
+  // Pusher parked outside the side wall; roller pivots about its own axis.
+  state.walls[wall_pusher_].translation_m = Vec3(0.0, m.belt_half_width_mm * kMm + 0.15, 0.0);
+  state.walls[wall_roller_].pivot_m =
+      Vec3(line_.squeeze.roller_s_mm * kMm, 0.0, (m.roller_up_gap_mm + m.roller_radius_mm) * kMm);
+  sim_->prepare();
+
+  counters_ = DemPlantCounters{};
+  faults_ = DemPlantFaults{};
+  time_ns_ = 0;
+  drives_ = {};
+  stations_ = Stations{};
+  infeed_ = Infeed{};
+  fillets_.clear();
+  fillet_of_body_.clear();
+  exit_count_ = 0;
+  exits_drained_ = 0;
+  command_count_ = 0;
+  command_head_ = 0;
+  last_plant_id_ = 0;
+  last_group_id_ = 0;
+  beam_ = false;
+  feed_rng_.seed_with(stream_seed(seed, 1));
+  body_rng_.seed_with(stream_seed(seed, 2));
+  sensor_rng_.seed_with(stream_seed(seed, 3));
+  for (std::size_t c = 0; c < kCameraCount; ++c) {
+    camera_rngs_[c].seed_with(stream_seed(seed, 16 + c));
+  }
+  const FastInfeedConfig& infeed = config_.shared.infeed;
+  infeed_.hopper_opening_mm = std::clamp(static_cast<double>(infeed.hopper_initial_opening_mm),
+                                         static_cast<double>(infeed.hopper_min_opening_mm),
+                                         static_cast<double>(infeed.hopper_max_opening_mm));
+  draw_next_feed();
+  std::memset(static_cast<void*>(&image_), 0, sizeof(image_));
+  for (std::size_t c = 0; c < kCameraCount; ++c) {
+    cameras_[c].sequence = 0;
+    cameras_[c].pending_count = 0;
+    cameras_[c].last_frame_time_ns = 0;
+    schedule_exposure(static_cast<CameraId>(c), true);
+  }
+  write_image(in);
+}
+
+void DemPlant::step(const OutputImage& out, std::int64_t dt_ns, InputImage& in) {
+  if (exits_drained_ > 0) {
+    const std::size_t left = exit_count_ - exits_drained_;
+    for (std::size_t i = 0; i < left; ++i) exits_[i] = exits_[exits_drained_ + i];
+    exit_count_ = left;
+    exits_drained_ = 0;
+  }
+  command_head_ = (command_head_ + 1) % kCommandHistory;
+  commands_[command_head_].arrival_ns = time_ns_;
+  commands_[command_head_].out = out;
+  command_count_ = std::min(command_count_ + 1, kCommandHistory);
+  std::int64_t remaining = dt_ns;
+  while (remaining > 0) {
+    const std::int64_t h_ns = std::min(remaining, step_ns_);
+    control_step(h_ns, out);
+    remaining -= h_ns;
+  }
+  publish_frames();
+  write_image(in);
+}
+
+const OutputImage& DemPlant::delayed_command(std::int64_t at_ns) const {
+  for (std::size_t i = 0; i < command_count_; ++i) {
+    const std::size_t slot = (command_head_ + kCommandHistory - i) % kCommandHistory;
+    if (commands_[slot].arrival_ns + drive_delay_ns_ <= at_ns) return commands_[slot].out;
+  }
+  if (command_count_ == kCommandHistory)
+    return commands_[(command_head_ + 1) % kCommandHistory].out;
+  return idle_command_;
+}
+
+void DemPlant::control_step(std::int64_t h_ns, const OutputImage& out) {
+  const double h_s = static_cast<double>(h_ns) * 1e-9;
+  step_drives(h_s, delayed_command(time_ns_));
+  step_stations(h_s, out);
+  command_walls(h_s);
+  // The engine runs whole steps up to the control step's end (its clock never runs ahead by
+  // more than half a step).
+  const double target_s = static_cast<double>(time_ns_ + h_ns) * 1e-9;
+  const double steps = std::floor((target_s - sim_->state().time_s) / engine_timestep_s() + 0.5);
+  if (steps > 0.0) {
+    sim_->step(static_cast<std::size_t>(steps));
+    counters_.engine_steps += static_cast<std::uint64_t>(steps);
+  }
+  time_ns_ += h_ns;
+  scan_particles();
+  apply_events(out);
+  step_infeed(h_s, out);
+  beam_ = beam_broken();
+  capture_frames();
+}
+
+// ---------------------------------------------------------------- particles and poses
+
+void DemPlant::scan_particles() {
+  const dem::State& s = sim_->state();
+  for (Fillet& f : fillets_) {
+    f.particles.clear();
+    f.centroid_m.setZero();
+    f.velocity_mps.setZero();
+    f.lower_m.setConstant(1e9);
+    f.upper_m.setConstant(-1e9);
+  }
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    const std::uint32_t body = s.body[k];
+    if (body >= fillet_of_body_.size() || fillet_of_body_[body] < 0) continue;
+    Fillet& f = fillets_[static_cast<std::size_t>(fillet_of_body_[body])];
+    f.particles.push_back(static_cast<std::uint32_t>(k));
+    f.centroid_m += s.position_m[k];
+    f.velocity_mps += s.velocity_m_per_s[k];
+    const Vec3 r = Vec3::Constant(s.radius_m[k]);
+    f.lower_m = f.lower_m.cwiseMin(s.position_m[k] - r);
+    f.upper_m = f.upper_m.cwiseMax(s.position_m[k] + r);
+  }
+  for (Fillet& f : fillets_) {
+    if (f.particles.empty()) continue;
+    // Equal spheres: the mean is the centre of mass.
+    const double inv = 1.0 / static_cast<double>(f.particles.size());
+    f.centroid_m *= inv;
+    f.velocity_mps *= inv;
+  }
+}
+
+DemPlant::Pose DemPlant::fit_pose(const Fillet& fillet) const {
+  // Least-squares rotation of the template onto the spheres (Kabsch): H = sum p (x - c)^T.
+  const dem::State& s = sim_->state();
+  const dem::FilletTemplate& t = templates_[fillet.variant];
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  for (const std::uint32_t k : fillet.particles) {
+    const std::uint32_t i = s.id[k] - fillet.first_id;
+    h += t.positions_m[i] * (s.position_m[k] - fillet.centroid_m).transpose();
+  }
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+  Pose pose;
+  pose.rotation = svd.matrixV() * d * svd.matrixU().transpose();
+  // Body x runs from the thick end to the tip; body z is the skin side's normal.
+  pose.angle_rad = wrap_angle_rad(std::atan2(pose.rotation(1, 0), pose.rotation(0, 0)));
+  pose.side = pose.rotation(2, 2) >= 0.0 ? SideUp::kSkin : SideUp::kBone;
+  return pose;
+}
+
+bool DemPlant::touching(std::size_t f) const {
+  // A sphere of this fillet within contact (plus 0.5 mm for the soft overlap's rounding) of a
+  // sphere of another: JKR holds touching fillets together, so contact is what a camera sees.
+  constexpr double kToleranceM = 0.0005;
+  const dem::State& s = sim_->state();
+  const Fillet& a = fillets_[f];
+  for (std::size_t g = 0; g < fillets_.size(); ++g) {
+    if (g == f) continue;
+    const Fillet& b = fillets_[g];
+    if ((a.lower_m.array() > b.upper_m.array() + kToleranceM).any() ||
+        (b.lower_m.array() > a.upper_m.array() + kToleranceM).any()) {
+      continue;
+    }
+    for (const std::uint32_t i : a.particles) {
+      for (const std::uint32_t j : b.particles) {
+        const double reach = s.radius_m[i] + s.radius_m[j] + kToleranceM;
+        if ((s.position_m[i] - s.position_m[j]).squaredNorm() < reach * reach) return true;
+      }
+    }
+  }
+  return false;
+}
+
+bool DemPlant::beam_broken() const {
+  // The beam runs across the belt at s = 0 and beam height: any sphere crossing it.
+  const dem::State& s = sim_->state();
+  const double beam_z = config_.machinery.beam_height_mm * kMm;
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    const double dx = s.position_m[k].x();
+    const double dz = s.position_m[k].z() - beam_z;
+    const double r = s.radius_m[k];
+    if (dx * dx + dz * dz < r * r) return true;
+  }
+  return false;
+}
+
+std::uint32_t DemPlant::add_fillet(std::uint8_t variant, SideUp side,
+                                   const Eigen::Vector3d& centroid_m, double angle_rad,
+                                   double v_mps, std::uint32_t group_id) {
+  const dem::FilletTemplate& t = templates_[variant];
+  dem::BodyPose pose;
+  pose.position_m = centroid_m;
+  // Bone side up: the template turned over about its length axis (heading unchanged).
+  pose.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(angle_rad, Vec3::UnitZ()));
+  if (side == SideUp::kBone) {
+    pose.orientation = pose.orientation * Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX());
+  }
+  pose.velocity_m_per_s = Vec3(v_mps, 0.0, 0.0);
+  const std::size_t first = sim_->state().size();
+  const std::size_t bond_begin = sim_->state().bonds.size();
+  const std::uint32_t body =
+      sim_->add_body(t.positions_m, t.radii_m, t.types, template_bonds_[variant], pose);
+  Fillet f;
+  f.plant_id = ++last_plant_id_;
+  f.group_id = group_id;
+  f.variant = variant;
+  f.body = body;
+  f.first_id = sim_->state().id[first];
+  f.bond_begin = static_cast<std::uint32_t>(bond_begin);
+  f.centroid_m = centroid_m;
+  f.previous_s_m = centroid_m.x();
+  f.progress_s_m = centroid_m.x();
+  f.progress_ns = time_ns_;
+  if (centroid_m.x() >= 0.0) {
+    f.fed = true;
+    ++counters_.fillets_fed;
+  }
+  f.thick_passed_roller = centroid_m.x() > line_.squeeze.roller_s_mm * kMm;
+  if (fillet_of_body_.size() <= body) fillet_of_body_.resize(body + 1, -1);
+  fillet_of_body_[body] = static_cast<std::int32_t>(fillets_.size());
+  fillets_.push_back(std::move(f));
+  ++counters_.fillets_spawned;
+  return fillets_.back().plant_id;
+}
+
+std::optional<std::uint32_t> DemPlant::spawn_fillet(const DemFilletSpawn& spawn) {
+  const std::size_t members = spawn.touching_pair ? 2 : 1;
+  if (fillets_.size() + members > config_.simulation.max_fillets) return std::nullopt;
+  const std::uint8_t variant =
+      std::min<std::uint8_t>(spawn.variant, static_cast<std::uint8_t>(templates_.size() - 1));
+  const dem::FilletTemplate& t = templates_[variant];
+  const double lift_m = config_.feeder.spawn_lift_mm * kMm;
+  const std::uint32_t group = ++last_group_id_;
+  const Vec3 centre(spawn.s_mm * kMm, spawn.y_mm * kMm, t.half_extent_m.z() + lift_m);
+  add_fillet(variant, spawn.side, centre, spawn.angle_rad, spawn.v_mps, group);
+  if (spawn.touching_pair) {
+    // Side by side to the fillet's left, at the offset where the closest two spheres touch
+    // with 0.1 mm overlap, so that the JKR neck forms and holds the pair together.
+    const Vec3 left(-std::sin(spawn.angle_rad), std::cos(spawn.angle_rad), 0.0);
+    const double contact_m = 2.0 * t.radii_m.front();
+    const double flip = spawn.side == SideUp::kBone ? -1.0 : 1.0;  // turned over: y -> -y
+    double offset_m = 0.0;
+    for (const Vec3& a : t.positions_m) {
+      for (const Vec3& b : t.positions_m) {
+        const double dx = a.x() - b.x();
+        const double dz = a.z() - b.z();
+        const double rest = contact_m * contact_m - dx * dx - dz * dz;
+        if (rest > 0.0) offset_m = std::max(offset_m, flip * (a.y() - b.y()) + std::sqrt(rest));
+      }
+    }
+    add_fillet(variant, spawn.side, centre + (offset_m - 0.0001) * left, spawn.angle_rad,
+               spawn.v_mps, group);
+  }
+  scan_particles();
+  return group;
+}
+
+// ---------------------------------------------------------------- exits and removal
+
+void DemPlant::record_exit(const Fillet& fillet, TrueExit exit) {
+  if (!fillet.fed) {
+    ++counters_.unfed_losses;
+    return;
+  }
+  ++counters_.exits[static_cast<std::size_t>(exit)];
+  if (exit_count_ >= exits_.size()) {
+    ++counters_.exits_not_recorded;
+    return;
+  }
+  const Pose pose = fit_pose(fillet);
+  const auto f = static_cast<std::size_t>(&fillet - fillets_.data());
+  TrueFilletExit& record = exits_[exit_count_++];
+  record = TrueFilletExit{};
+  record.plant_id = fillet.plant_id;
+  record.group_id = fillet.group_id;
+  record.time_ns = time_ns_;
+  record.exit = exit;
+  record.hand = templates_[fillet.variant].name.ends_with("_left") ? Hand::kLeft : Hand::kRight;
+  record.side = pose.side;
+  record.angle_rad = static_cast<float>(pose.angle_rad);
+  record.y_mm = static_cast<float>(fillet.centroid_m.y() / kMm);
+  record.singulated = !touching(f);
+  record.squeezed_ok = fillet.squeezed_ok;
+}
+
+void DemPlant::take_out_removed() {
+  if (std::none_of(fillets_.begin(), fillets_.end(), [](const Fillet& f) { return f.remove; })) {
+    return;
+  }
+  // The engine has no removal: a fresh simulation takes the remaining fillets over with their
+  // positions, velocities, spins, bond rest lengths and bond states (contact history restarts,
+  // a small perturbation), and the walls' states.
+  const dem::State& old = sim_->state();
+  auto fresh = std::make_unique<dem::Simulation>(model_);
+  fresh->reserve(old.size(), old.bonds.size());
+  std::vector<Fillet> kept;
+  kept.reserve(fillets_.size());
+  std::vector<std::uint32_t> old_index;
+  for (Fillet& f : fillets_) {
+    if (f.remove) continue;
+    const dem::FilletTemplate& t = templates_[f.variant];
+    old_index.assign(t.positions_m.size(), 0);
+    for (const std::uint32_t k : f.particles) old_index[old.id[k] - f.first_id] = k;
+    const std::size_t first = fresh->state().size();
+    const std::size_t bond_begin = fresh->state().bonds.size();
+    const std::uint32_t body =
+        fresh->add_body(t.positions_m, t.radii_m, t.types, template_bonds_[f.variant], {});
+    dem::State& s = fresh->mutable_state();
+    for (std::size_t i = 0; i < t.positions_m.size(); ++i) {
+      s.position_m[first + i] = old.position_m[old_index[i]];
+      s.velocity_m_per_s[first + i] = old.velocity_m_per_s[old_index[i]];
+      s.angular_velocity_rad_per_s[first + i] = old.angular_velocity_rad_per_s[old_index[i]];
+    }
+    for (std::size_t b = 0; b < t.bonds.size(); ++b) {
+      s.bonds[bond_begin + b].rest_length_m = old.bonds[f.bond_begin + b].rest_length_m;
+      s.bond_states[bond_begin + b] = old.bond_states[f.bond_begin + b];
+    }
+    f.body = body;
+    f.first_id = s.id[first];
+    f.bond_begin = static_cast<std::uint32_t>(bond_begin);
+    kept.push_back(std::move(f));
+  }
+  dem::State& s = fresh->mutable_state();
+  s.walls = old.walls;
+  s.time_s = old.time_s;
+  s.step = old.step;
+  sim_ = std::move(fresh);
+  sim_->prepare();
+  fillets_ = std::move(kept);
+  fillet_of_body_.assign(fillets_.empty() ? 0 : fillets_.back().body + 1, -1);
+  for (std::size_t f = 0; f < fillets_.size(); ++f) {
+    fillet_of_body_[fillets_[f].body] = static_cast<std::int32_t>(f);
+  }
+  ++counters_.rebuilds;
+  scan_particles();
+}
+
+std::span<const TrueFilletExit> DemPlant::drain_exits() {
+  const std::span<const TrueFilletExit> fresh(exits_.data() + exits_drained_,
+                                              exit_count_ - exits_drained_);
+  exits_drained_ = exit_count_;
+  return fresh;
+}
+
+std::uint64_t DemPlant::fillets_on_line() const {
+  std::uint64_t count = 0;
+  for (const Fillet& f : fillets_) count += f.fed && !f.remove ? 1 : 0;
+  return count;
+}
+
+std::vector<DemFilletView> DemPlant::fillets() const {
+  std::vector<DemFilletView> views;
+  for (std::size_t f = 0; f < fillets_.size(); ++f) {
+    const Fillet& fillet = fillets_[f];
+    const Pose pose = fit_pose(fillet);
+    DemFilletView v;
+    v.plant_id = fillet.plant_id;
+    v.group_id = fillet.group_id;
+    v.hand = templates_[fillet.variant].name.ends_with("_left") ? Hand::kLeft : Hand::kRight;
+    v.side = pose.side;
+    v.s_mm = fillet.centroid_m.x() / kMm;
+    v.y_mm = fillet.centroid_m.y() / kMm;
+    v.z_mm = fillet.centroid_m.z() / kMm;
+    v.angle_rad = pose.angle_rad;
+    v.v_mps = fillet.velocity_mps.x();
+    v.min_s_mm = fillet.lower_m.x() / kMm;
+    v.max_s_mm = fillet.upper_m.x() / kMm;
+    v.fed = fillet.fed;
+    v.touching = touching(f);
+    v.spheres = fillet.particles.size();
+    views.push_back(v);
+  }
+  return views;
+}
+
+// ---------------------------------------------------------------- input image
+
+void DemPlant::write_image(InputImage& in) {
+  InputImage& image = image_;
+  image.time_ns = time_ns_;
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    image.drives[d].speed_mps = static_cast<float>(drives_[d].speed_mps);
+    image.drives[d].encoder_counts = drives_[d].encoder_counts;
+    image.drives[d].ready = drives_[d].ready;
+    image.drives[d].fault = drives_[d].fault;
+  }
+  const FastInfeedConfig& infeed = config_.shared.infeed;
+  const double layer_mm = infeed_.backlog_fillets * infeed.layer_mm_per_fillet;
+  infeed_.level_reading_mm =
+      std::max(0.0, layer_mm + static_cast<double>(infeed.level_noise_mm) * sensor_rng_.normal());
+  image.takt_beam_broken = beam_;
+  image.level_mm = static_cast<float>(infeed_.level_reading_mm);
+  image.hopper_opening_mm = static_cast<float>(infeed_.hopper_opening_mm);
+  image.leveller_speed_rpm = static_cast<float>(infeed_.leveller_rpm);
+  image.leveller_overload = false;
+  image.flip_plate1_flipping = stations_.plate1_travel >= 1.0;
+  image.flip_plate2_flipping = stations_.plate2_travel >= 1.0;
+  image.centring_position_mm = static_cast<float>(stations_.pusher_mm);
+  image.squeeze_roller_down = stations_.roller_travel >= 1.0;
+  image.estop_ok = !faults_.estop_open;
+  image.start_request = false;
+  image.stop_request = false;
+  image.fault_reset_request = false;
+  std::memcpy(static_cast<void*>(&in), static_cast<const void*>(&image_), sizeof(InputImage));
+}
+
+}  // namespace fl

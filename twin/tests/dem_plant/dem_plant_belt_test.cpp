@@ -1,0 +1,74 @@
+// Belts, drives and the takt barrier of the DEM plant.
+#include <gtest/gtest.h>
+
+#include "dem_plant_test_support.hpp"
+
+namespace fl::test {
+namespace {
+
+TEST(DemPlantBelt, FilletReachesBeltSpeedAndIsCarriedTheAnalyticDistance) {
+  DemRig rig;
+  rig.run(0.2);  // guide at 0.5 m/s: 5 ms delay + 0.1 s ramp at 5 m/s^2
+  ASSERT_DOUBLE_EQ(rig.plant->drive_speed_mps(DriveId::kGuide), 0.5);
+  DemFilletSpawn spawn;
+  spawn.s_mm = 1100.0;  // guide belt, between the rails (+-180 mm here)
+  spawn.v_mps = 0.0;    // dropped at rest: friction must bring it up to speed
+  ASSERT_TRUE(rig.plant->spawn_fillet(spawn));
+  // Friction accelerates it at up to mu g = 4.9 m/s^2: at speed within about 0.1 s; 0.4 s
+  // leaves the soft body's landing bounce time to settle.
+  rig.run(0.4);
+  const DemFilletView before = rig.plant->fillets().at(0);
+  // The bonded body rings at a few per cent of its speed (E = 3.7e5 Pa), so the speed is
+  // checked loosely and the distance over 0.5 s, which averages the ringing.
+  EXPECT_NEAR(before.v_mps, 0.5, 0.05);
+  rig.run(0.5);
+  const DemFilletView after = rig.plant->fillets().at(0);
+  EXPECT_NEAR(after.s_mm - before.s_mm, 0.5 * 500.0, 10.0);  // 250 mm, within 4 %
+  EXPECT_NEAR(after.y_mm, 0.0, 5.0);                         // a straight belt: no drift
+  EXPECT_NEAR(after.angle_rad, 0.0, 0.05);
+  EXPECT_GT(after.z_mm, 0.0);  // on the belt, not through it
+}
+
+TEST(DemPlantBelt, EncodersCountTheRampedTravel) {
+  DemRig rig;
+  rig.run(0.5);
+  // The command arrives at t = 0 and acts after the 5 ms delay; the ramp to 0.5 m/s at
+  // 5 m/s^2 takes 0.1 s: travel = v (T - delay - ramp / 2) = 0.5 (0.5 - 0.005 - 0.05) m =
+  // 222.5 mm = 2225 counts at 10 counts per mm (the 1 ms steps integrate the ramp exactly).
+  const auto counts = rig.in.drives[index(DriveId::kGuide)].encoder_counts;
+  EXPECT_NEAR(static_cast<double>(counts), 2225.0, 1.0);
+  EXPECT_FLOAT_EQ(rig.in.drives[index(DriveId::kGuide)].speed_mps, 0.5F);
+  EXPECT_TRUE(rig.in.drives[index(DriveId::kGuide)].ready);
+  // Reversed drive counts down.
+  rig.out.drives[index(DriveId::kReject)].speed_mps = -0.5F;
+  rig.run(0.5);
+  EXPECT_LT(rig.in.drives[index(DriveId::kReject)].encoder_counts, 2225);
+}
+
+TEST(DemPlantBelt, LaserBarrierSeesTheFilletCrossing) {
+  DemRig rig;
+  rig.out.drives[index(DriveId::kTakt)].speed_mps = 0.0F;
+  DemFilletSpawn spawn;
+  const double half_length_mm = rig.plant->templates()[2].half_extent_m.x() * 1000.0;
+  spawn.s_mm = -half_length_mm - 20.0;  // front 20 mm before the beam
+  ASSERT_TRUE(rig.plant->spawn_fillet(spawn));
+  rig.run(0.1);
+  EXPECT_FALSE(rig.in.takt_beam_broken);
+  EXPECT_EQ(rig.plant->fillets_fed(), 0U);
+  // Takt at 0.12 m/s: the 20 mm take 0.17 s (plus delay and ramp).
+  rig.out.drives[index(DriveId::kTakt)].speed_mps = 0.12F;
+  bool broken = false;
+  for (int i = 0; i < 40 && !broken; ++i) {
+    rig.step();
+    broken = rig.in.takt_beam_broken;
+  }
+  EXPECT_TRUE(broken);
+  // The transition belt pulls it across: centroid past 0 (fed), then the beam clears.
+  rig.run(3.0);
+  EXPECT_FALSE(rig.in.takt_beam_broken);
+  EXPECT_EQ(rig.plant->fillets_fed(), 1U);
+  EXPECT_EQ(rig.plant->fillets_on_line(), 1U);
+}
+
+}  // namespace
+}  // namespace fl::test

@@ -1,0 +1,61 @@
+// Shared scaffolding for the DEM plant's tests: one plant per test binary run (templates take
+// a moment), the reference line, belts running at their nominal speeds.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "fl/controller/line_config.hpp"
+#include "fl/twin/dem_plant/dem_plant.hpp"
+
+namespace fl::test {
+
+inline constexpr std::int64_t kMs = 1000000;
+
+// Every product-path drive at its nominal speed as fast as allowed; no infeed (bulk and
+// leveller off, so the feeder places nothing), stations idle.
+inline OutputImage belts_running(const LineConfig& line) {
+  OutputImage out{};
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    out.drives[d].enable = true;
+    out.drives[d].speed_mps = line.sections[d].nominal_speed_mps;
+  }
+  out.drives[index(DriveId::kMultilane1Right)].speed_mps =
+      line.sections[index(DriveId::kMultilane1Left)].nominal_speed_mps;
+  out.drives[index(DriveId::kMultilane2Right)].speed_mps =
+      line.sections[index(DriveId::kMultilane2Left)].nominal_speed_mps;
+  out.drives[index(DriveId::kBulk)].speed_mps = 0.0F;
+  return out;
+}
+
+// The shipped configuration (7 mm spheres) on one engine thread: a test rig holds a few
+// fillets (under 200 spheres), where the threads' barriers cost more than they share, above
+// all on a loaded machine. The determinism test runs two threads.
+inline DemPlantConfig test_config(int threads = 1) {
+  DemPlantConfig config = load_dem_plant_config(FL_SOURCE_DIR "/config/plant_dem.yaml");
+  config.simulation.thread_count = threads;
+  return config;
+}
+
+struct DemRig {
+  explicit DemRig(DemPlantConfig plant_config = test_config(),
+                  LineConfig line_config = default_line_config(), std::uint64_t seed = 1)
+      : line(line_config),
+        config(std::move(plant_config)),
+        plant(std::make_unique<DemPlant>(line, config)),
+        out(belts_running(line)) {
+    plant->reset(seed, in);
+  }
+  void step(std::int64_t dt_ns = 10 * kMs) { plant->step(out, dt_ns, in); }
+  void run(double seconds, std::int64_t dt_ns = 10 * kMs) {
+    const auto steps = static_cast<std::int64_t>(seconds * 1e9 / static_cast<double>(dt_ns) + 0.5);
+    for (std::int64_t i = 0; i < steps; ++i) step(dt_ns);
+  }
+  LineConfig line;
+  DemPlantConfig config;
+  std::unique_ptr<DemPlant> plant;
+  OutputImage out;
+  InputImage in{};
+};
+
+}  // namespace fl::test
