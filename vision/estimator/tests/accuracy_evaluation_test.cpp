@@ -7,7 +7,7 @@
 //
 // Targets of issue 4: angle error p95 < 2 degrees, hand and side >= 99.5 %, touching pairs
 // flagged >= 99 %; position p95 < 3 mm is this suite's own (the centring tolerance is 20 mm).
-// The figures are printed for docs/benchmarks_vision.md.
+// The figures are printed for docs/benchmarks.md (vision).
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -25,7 +25,7 @@ BeltCalibration exact_calibration(const render::RenderCamera& camera);
 
 // Imaging with realistic spreads, drawn from `rng`: exposure 0.75..1.25, a lighting gradient
 // up to 30 % across the frame, vignetting up to 20 %, motion blur up to 3 px, noise 1..5 grey
-// levels (documented in docs/benchmarks_vision.md).
+// levels (documented in docs/benchmarks.md (vision)).
 render::ImagingConditions realistic_imaging(cv::RNG& rng);
 
 struct RandomSceneOptions {

@@ -9,7 +9,7 @@
 // camera's belt-plane homography, so silhouette, thickness and surface normals all come from
 // the mesh.
 //
-// Appearance (a plausible model, not a measured one; see docs/benchmarks_vision.md):
+// Appearance (a plausible model, not a measured one; see docs/benchmarks.md (vision)):
 // - belt: a uniform colour (food-grade blue by default) with fine grain and the darker hinge
 //   lines of a modular belt every `hinge_pitch_mm` across travel;
 // - meat: a base colour per side, jittered per fillet. Skin side: paler and less saturated,
