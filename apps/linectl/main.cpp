@@ -13,6 +13,7 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <thread>
 
 #include "duration.hpp"
@@ -133,7 +134,7 @@ class LedgerWriter {
   }
   void write(const FilletRecord& r) {
     if (!file_.is_open()) return;
-    constexpr double kDeg = 180.0 / 3.14159265358979;
+    constexpr double kDeg = 180.0 / std::numbers::pi;
     file_ << r.id << ',' << static_cast<double>(r.created_ns) / 1e9 << ','
           << static_cast<double>(r.closed_ns) / 1e9 << ',' << to_string(r.outcome) << ','
           << to_string(r.lost_reason) << ',' << static_cast<int>(r.hand) << ','

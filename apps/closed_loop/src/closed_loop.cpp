@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <sstream>
 
 namespace fl::apps {
@@ -15,7 +16,7 @@ bool in_spec(const LineConfig& config, const TrueFilletExit& exit) {
   const float target = (exit.hand == Hand::kLeft && tolerance.mirror_for_left)
                            ? -tolerance.target_angle_rad
                            : tolerance.target_angle_rad;
-  const float error = std::remainder(exit.angle_rad - target, 2.0F * 3.14159265F);
+  const float error = std::remainder(exit.angle_rad - target, 2.0F * std::numbers::pi_v<float>);
   return exit.singulated && exit.side == config.flip.target_side &&
          std::fabs(error) <= tolerance.angle_tol_rad &&
          std::fabs(exit.y_mm) <= tolerance.lateral_tol_mm;

@@ -49,7 +49,7 @@ float FlipStation::decision_s_mm() const {
          1.5F * 1000.0F * guide_speed_mps * config_.flip.actuation_s;
 }
 
-void FlipStation::classify(const ScanContext& ctx, Item& item) const {
+void FlipStation::classify(Item& item) const {
   item.classified = true;
   const CameraEvidence& evidence = item.evidence[index(CameraId::kOrientation)];
   item.record.singulated = evidence.frames == 0 || evidence.singulated();
@@ -77,7 +77,6 @@ void FlipStation::classify(const ScanContext& ctx, Item& item) const {
   const float target = config_.tolerance.target_angle_rad;
   item.target_angle_rad =
       (item.hand == Hand::kLeft && config_.tolerance.mirror_for_left) ? -target : target;
-  (void)ctx;
 }
 
 void FlipStation::schedule_plate(const ScanContext& ctx, bool end_over_end, bool& command) {
@@ -105,7 +104,7 @@ void FlipStation::update(const ScanContext& ctx, OutputImage& out) {
   const float decide_at = decision_s_mm();
   for (Item& item : ctx.tracker.items()) {
     if (!item.active) continue;
-    if (!item.classified && item.s_mm >= decide_at) classify(ctx, item);
+    if (!item.classified && item.s_mm >= decide_at) classify(item);
     // Track the plates' effect with the plates' own end switches, so a late plate shows
     // up as a wrong side at the final camera rather than as a silent guess.
     if (!item.passed_plate1 && item.s_mm >= config_.flip.plate1_s_mm) {

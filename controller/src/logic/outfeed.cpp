@@ -54,8 +54,7 @@ float FinalStation::decision_s_mm() const {
                   config_.tolerance.final_reject_s_mm - 60.0F);
 }
 
-void FinalStation::inspect(const ScanContext& ctx, Item& item) const {
-  (void)ctx;
+void FinalStation::inspect(Item& item) const {
   item.final_checked = true;
   const CameraEvidence& evidence = item.evidence[index(CameraId::kFinal)];
   if (item.reject_pending) {  // missed by the reversal: never placed
@@ -90,7 +89,7 @@ void FinalStation::update(const ScanContext& ctx, OutputImage& out) {
   out.final_reject = false;
   for (Item& item : ctx.tracker.items()) {
     if (!item.active) continue;
-    if (!item.final_checked && item.s_mm >= decide_at) inspect(ctx, item);
+    if (!item.final_checked && item.s_mm >= decide_at) inspect(item);
     if (item.final_reject && std::fabs(item.s_mm - knife_s_mm) <= kKnifeWindowMm) {
       out.final_reject = true;
     }

@@ -94,7 +94,7 @@ class FlipStation {
   [[nodiscard]] float decision_s_mm() const;
 
  private:
-  void classify(const ScanContext& ctx, Item& item) const;
+  void classify(Item& item) const;
   void schedule_plate(const ScanContext& ctx, bool end_over_end, bool& command);
   const LineConfig& config_;
   bool plate1_command_ = false;
@@ -182,7 +182,7 @@ class FinalStation {
   [[nodiscard]] float decision_s_mm() const;
 
  private:
-  void inspect(const ScanContext& ctx, Item& item) const;
+  void inspect(Item& item) const;
   const LineConfig& config_;
 };
 

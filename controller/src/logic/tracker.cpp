@@ -131,29 +131,26 @@ bool Tracker::confirm_unmatched(CameraId camera, float s_mm, std::int64_t time_n
   return true;
 }
 
+namespace {
+// The belt that carries an item together with `drive`: a multilane unit's right belt
+// beside its left one; any other belt carries it alone.
+DriveId partner_of(DriveId drive) {
+  if (drive == DriveId::kMultilane1Left) return DriveId::kMultilane1Right;
+  if (drive == DriveId::kMultilane2Left) return DriveId::kMultilane2Right;
+  return drive;
+}
+}  // namespace
+
 float Tracker::travel_at_mm(float s_mm) const {
+  // A multilane unit carries the item forward at the mean of its two belts (for a single
+  // belt the mean of it with itself is exactly its own value).
   const DriveId drive = drive_at(s_mm);
-  // A multilane unit carries the item forward at the mean of its two belts.
-  if (drive == DriveId::kMultilane1Left) {
-    return 0.5F * (travel_mm(DriveId::kMultilane1Left) + travel_mm(DriveId::kMultilane1Right));
-  }
-  if (drive == DriveId::kMultilane2Left) {
-    return 0.5F * (travel_mm(DriveId::kMultilane2Left) + travel_mm(DriveId::kMultilane2Right));
-  }
-  return travel_mm(drive);
+  return 0.5F * (travel_mm(drive) + travel_mm(partner_of(drive)));
 }
 
 float Tracker::speed_at_mps(const InputImage& in, float s_mm) const {
   const DriveId drive = drive_at(s_mm);
-  if (drive == DriveId::kMultilane1Left) {
-    return 0.5F * (in.drives[index(DriveId::kMultilane1Left)].speed_mps +
-                   in.drives[index(DriveId::kMultilane1Right)].speed_mps);
-  }
-  if (drive == DriveId::kMultilane2Left) {
-    return 0.5F * (in.drives[index(DriveId::kMultilane2Left)].speed_mps +
-                   in.drives[index(DriveId::kMultilane2Right)].speed_mps);
-  }
-  return in.drives[index(drive)].speed_mps;
+  return 0.5F * (in.drives[index(drive)].speed_mps + in.drives[index(partner_of(drive))].speed_mps);
 }
 
 Item* Tracker::create(std::int64_t time_ns, float s_mm, bool adopted) {
