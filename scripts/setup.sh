@@ -8,7 +8,7 @@ packages=(
   clang clang-format clang-tidy libclang-rt-14-dev
   libeigen3-dev libspdlog-dev libfmt-dev libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libopencv-dev cyclonedds-dev cyclonedds-tools
+  libopencv-dev cyclonedds-dev cyclonedds-tools openssl
   rt-tests python3
   qemu-system-x86 busybox-static can-utils
   libzstd-dev liblz4-dev

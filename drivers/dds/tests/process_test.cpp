@@ -1,0 +1,99 @@
+// Two real processes over loopback: the test is the controller's side (DdsCameraInput), a
+// forked drivers_dds_peer is the camera node. Estimates arrive intact; a peer that stops
+// publishing but lives misses the deadline; a peer killed with SIGKILL (no goodbye on the
+// wire) loses liveliness within the lease.
+#include <gtest/gtest.h>
+
+#include <chrono>
+
+#include "dds_test_support.hpp"
+#include "fl/drivers/dds/camera_input.hpp"
+
+namespace fl::drivers::dds {
+namespace {
+
+using namespace std::chrono_literals;
+using test::PeerProcess;
+using test::wait_until;
+
+std::string loopback_uri() {
+  return std::string("file://") + FL_DDS_CONFIG_DIR + "/cyclonedds-loopback.xml";
+}
+
+TEST(DdsTwoProcesses, EstimatesFromAnotherProcessArriveIntact) {
+  Participant controller(21);
+  DdsCameraInput input(controller);
+  // 40 frames at 5 ms: every fill level 0..8 several times, done in 0.2 s.
+  constexpr int kFrames = 40;
+  PeerProcess peer({"publish", "21", "2", "5", std::to_string(kFrames), "exit"}, loopback_uri());
+  InputImage in;
+  std::uint32_t intact = 0;
+  std::uint32_t last_sequence = 0;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        input.read(in);
+        const CameraFrame& frame = in.cameras[index(CameraId::kMultilane1)];
+        if (frame.sequence != last_sequence) {
+          last_sequence = frame.sequence;
+          if (test::frame_intact(CameraId::kMultilane1, frame)) ++intact;
+        }
+        return last_sequence == kFrames;
+      },
+      10s))
+      << "last sequence " << last_sequence << ", peer: " << peer.output();
+  EXPECT_EQ(peer.wait_exit(5s), 0);
+  // Keep-last 1 on both sides: a frame the listener has not taken when the next one arrives
+  // is replaced by it, by design (only the newest frame matters). Idle, all 40 arrive;
+  // on two loaded cores a few are superseded. Every frame that arrives is intact.
+  const std::uint64_t accepted = input.counters().samples_accepted;
+  EXPECT_GE(accepted, static_cast<std::uint64_t>(kFrames / 2));
+  EXPECT_LE(accepted, static_cast<std::uint64_t>(kFrames));
+  EXPECT_GE(intact, static_cast<std::uint32_t>(kFrames / 4));  // the 1 ms poll sees most
+  EXPECT_EQ(input.counters().rejected_total(), 0U);
+  // The frame's exposure time is the peer's CLOCK_MONOTONIC: the same clock on one host.
+  EXPECT_LT(test::monotonic_ns() - in.cameras[index(CameraId::kMultilane1)].frame_time_ns,
+            5'000'000'000);
+}
+
+TEST(DdsTwoProcesses, PeerThatStopsPublishingMissesTheDeadline) {
+  Participant controller(22);
+  DdsCameraInput input(controller);  // 40 ms camera period: 120 ms deadline
+  // Ten 40 ms frames, then alive and silent.
+  PeerProcess peer({"publish", "22", "0", "40", "10", "hang"}, loopback_uri());
+  InputImage in;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        input.read(in);
+        return in.cameras[index(CameraId::kOrientation)].sequence == 10;  // the last frame
+      },
+      10s))
+      << peer.output();
+  EXPECT_FALSE(input.health(CameraId::kOrientation).deadline_missed);
+  ASSERT_TRUE(wait_until([&] { return input.health(CameraId::kOrientation).deadline_missed; }, 2s));
+  EXPECT_TRUE(input.health(CameraId::kOrientation).stale());
+  EXPECT_TRUE(input.health(CameraId::kOrientation).writer_alive);  // silent, not dead
+}
+
+TEST(DdsTwoProcesses, KilledPeerLosesLivelinessWithinTheLease) {
+  Participant controller(23);
+  DdsCameraInput input(controller);
+  PeerProcess peer({"publish", "23", "1", "20", "0", "exit"}, loopback_uri());  // until killed
+  ASSERT_TRUE(
+      wait_until([&] { return input.health(CameraId::kPosition).frames_accepted >= 5; }, 10s))
+      << peer.output();
+  ASSERT_TRUE(input.health(CameraId::kPosition).writer_alive);
+  peer.kill_now();
+  const std::int64_t killed_at = test::monotonic_ns();
+  ASSERT_TRUE(wait_until([&] { return !input.health(CameraId::kPosition).writer_alive; }, 5s));
+  const std::int64_t lost_after_ns = test::monotonic_ns() - killed_at;
+  // The writer's lease is 3 periods of its 20 ms camera: 60 ms. Cyclone checks leases on
+  // its own timer, so allow a second on a loaded machine; without liveliness it would take
+  // the participant's 10 s lease.
+  EXPECT_LT(lost_after_ns, 1'000'000'000);
+  EXPECT_GE(input.counters().liveliness_lost, 1U);
+  EXPECT_TRUE(input.health(CameraId::kPosition).stale());
+  EXPECT_EQ(peer.wait_exit(1s), 128 + 9);  // SIGKILL
+}
+
+}  // namespace
+}  // namespace fl::drivers::dds
