@@ -67,6 +67,8 @@ ModelSpec load_model_spec(const std::filesystem::path& yaml_file, const LawRegis
       spec.neighbor_skin_m =
           solver.read_double("neighbor_skin_m", Range::above(0.0).and_below(1.0));
       spec.thread_count = solver.read_int<int>("thread_count", Range::closed(1, 256));
+      spec.min_particles_per_thread = solver.read_int_or<int>(
+          "min_particles_per_thread", spec.min_particles_per_thread, Range::closed(1, 1e9));
       spec.sort_every_rebuilds =
           solver.read_int_or<int>("sort_every_rebuilds", 20, Range::closed(0, 1e6));
       spec.gravity_m_per_s2 = read_vec3(solver, "gravity_m_per_s2", spec.gravity_m_per_s2);

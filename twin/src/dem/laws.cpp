@@ -6,6 +6,8 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "fl/twin/dem/state.hpp"
+
 namespace fl::dem {
 namespace {
 
@@ -185,6 +187,49 @@ class Jkr final : public ContactLaw {
 // No damping, no bending or twisting moment. Breaks when the tensile normal stress -F_n/A
 // exceeds normal_strength_pa, the shear stress |F_t|/A exceeds shear_strength_pa, or the
 // centres separate beyond the sum of the contact radii.
+// The batch loop shared by all bond laws: bond geometry at the bond point (between the centres
+// in proportion to the radii), the law's per-bond update, forces and torques on both particles.
+template <typename PerBond>
+bool run_bond_batch(const BondBatch& b, PerBond&& per_bond) {
+  bool broke = false;
+  for (std::uint32_t k = b.begin; k < b.end; ++k) {
+    BondState& state = b.states[k];
+    if (state.broken) continue;
+    const Bond& bond = b.bonds[k];
+    const std::uint32_t i = bond.i;
+    const std::uint32_t j = bond.j;
+    const Vec3 d = b.position_m[i] - b.position_m[j];
+    BondGeometry g;
+    g.distance_m = d.norm();
+    g.normal = d * (1.0 / g.distance_m);
+    const double ri = b.radius_m[i];
+    const double rj = b.radius_m[j];
+    const double arm_i = g.distance_m * ri / (ri + rj);
+    const double arm_j = g.distance_m - arm_i;
+    g.relative_velocity_m_per_s =
+        b.velocity_m_per_s[i] - b.velocity_m_per_s[j] -
+        (arm_i * b.angular_velocity_rad_per_s[i] + arm_j * b.angular_velocity_rad_per_s[j])
+            .cross(g.normal);
+    g.rest_length_m = bond.rest_length_m;
+    g.bond_radius_m = bond.bond_radius_m;
+    g.break_distance_m = bond.break_distance_m;
+    g.timestep_s = b.timestep_s;
+    BondForce f;
+    per_bond(g, state, f);
+    if (state.broken) {
+      broke = true;
+      continue;
+    }
+    const Vec3 force = f.normal_force_n * g.normal + f.shear_force_n;
+    const Vec3 t_cross_n = f.shear_force_n.cross(g.normal);
+    b.force_n[i] += force;
+    b.force_n[j] -= force;
+    b.torque_nm[i] += arm_i * t_cross_n + f.torque_on_i_nm;
+    b.torque_nm[j] += arm_j * t_cross_n + f.torque_on_j_nm;
+  }
+  return broke;
+}
+
 class BondedParticleModel final : public BondLaw {
  public:
   BondedParticleModel(const LawParameters& parameters, const PairMaterial&)
@@ -195,39 +240,57 @@ class BondedParticleModel final : public BondLaw {
         disk_scale_(parameters.at("bonded_disk_scale")) {}
 
   void compute(const BondGeometry& g, BondState& state, BondForce& f) const override {
+    update(g, state, f);
+    if (!state.broken) f.elastic_energy_j = elastic_energy_j(state, g.bond_radius_m);
+  }
+
+  bool compute_batch(const BondBatch& batch) const override {
+    return run_bond_batch(batch, [this](const BondGeometry& g, BondState& state, BondForce& f) {
+      update(g, state, f);
+    });
+  }
+
+  [[nodiscard]] double elastic_energy_j(const BondState& state,
+                                        double bond_radius_m) const override {
+    const double area = area_m2(bond_radius_m);
+    return state.normal_force_n * state.normal_force_n / (2.0 * normal_stiffness_ * area) +
+           state.shear_force_n.squaredNorm() / (2.0 * shear_stiffness_ * area);
+  }
+
+  [[nodiscard]] double normal_stiffness_n_per_m(double bond_radius_m) const override {
+    return normal_stiffness_ * area_m2(bond_radius_m);
+  }
+  [[nodiscard]] double shear_stiffness_n_per_m(double bond_radius_m) const override {
+    return shear_stiffness_ * area_m2(bond_radius_m);
+  }
+
+ private:
+  [[nodiscard]] double area_m2(double bond_radius_m) const {
+    const double radius = disk_scale_ * bond_radius_m;
+    return kPi * radius * radius;
+  }
+
+  void update(const BondGeometry& g, BondState& state, BondForce& f) const {
     if (g.distance_m > g.break_distance_m) {
       state.broken = true;
       return;
     }
-    const double radius = disk_scale_ * g.bond_radius_m;
-    const double area = kPi * radius * radius;
+    const double area = area_m2(g.bond_radius_m);
     const double normal_velocity = g.relative_velocity_m_per_s.dot(g.normal);
     const Vec3 tangential_velocity = g.relative_velocity_m_per_s - normal_velocity * g.normal;
     state.normal_force_n = -normal_stiffness_ * area * (g.distance_m - g.rest_length_m);
     rotate_into_tangent_plane(state.shear_force_n, g.normal);
     state.shear_force_n -= shear_stiffness_ * area * g.timestep_s * tangential_velocity;
+    const double shear_limit_n = shear_strength_ * area;
     if (-state.normal_force_n > normal_strength_ * area ||
-        state.shear_force_n.norm() > shear_strength_ * area) {
+        state.shear_force_n.squaredNorm() > shear_limit_n * shear_limit_n) {
       state.broken = true;
       return;
     }
     f.normal_force_n = state.normal_force_n;
     f.shear_force_n = state.shear_force_n;
-    f.elastic_energy_j =
-        state.normal_force_n * state.normal_force_n / (2.0 * normal_stiffness_ * area) +
-        state.shear_force_n.squaredNorm() / (2.0 * shear_stiffness_ * area);
   }
 
-  [[nodiscard]] double normal_stiffness_n_per_m(double bond_radius_m) const override {
-    const double radius = disk_scale_ * bond_radius_m;
-    return normal_stiffness_ * kPi * radius * radius;
-  }
-  [[nodiscard]] double shear_stiffness_n_per_m(double bond_radius_m) const override {
-    const double radius = disk_scale_ * bond_radius_m;
-    return shear_stiffness_ * kPi * radius * radius;
-  }
-
- private:
   double normal_stiffness_;
   double shear_stiffness_;
   double normal_strength_;
@@ -272,6 +335,12 @@ std::vector<std::string> keys_of(const Map& map) {
 }
 
 }  // namespace
+
+bool BondLaw::compute_batch(const BondBatch& batch) const {
+  return run_bond_batch(batch, [this](const BondGeometry& g, BondState& state, BondForce& f) {
+    compute(g, state, f);
+  });
+}
 
 double restitution_damping_factor(double restitution) {
   if (restitution >= 1.0) {

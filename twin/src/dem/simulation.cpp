@@ -30,7 +30,6 @@ struct CarriedContact {  // contact history carried over a neighbour-list rebuil
 
 struct ThreadTally {  // per-thread sums, reduced in thread order
   double contact_energy_j = 0.0;
-  double bond_energy_j = 0.0;
   std::size_t touching = 0;
   bool bond_broke = false;
   char padding[64] = {};  // keep threads' tallies on separate cache lines
@@ -57,7 +56,8 @@ struct Simulation::Impl {
   std::size_t type_count = 0;
   std::vector<const Interaction*> interactions;  // type pair -> interaction (contact laws)
   std::vector<double> pair_range_m;              // adhesion range per type pair
-  int threads = 1;
+  int threads = 1;                               // at most (ModelSpec::thread_count)
+  int active_threads = 1;                        // for the current particle count, set by prepare()
   double dt = 0.0;
   Vec3 gravity = Vec3::Zero();
 
@@ -84,7 +84,8 @@ struct Simulation::Impl {
   std::vector<const BondLaw*> bond_laws;
   std::vector<std::uint32_t> partner_offsets;  // per particle: bonded partners (CSR)
   std::vector<std::uint32_t> partner_particle;
-  std::vector<std::uint32_t> partner_bond;
+  bool partners_valid = false;  // until a bond breaks, particles are re-ordered or added
+  std::vector<std::uint32_t> bonded_stamp;  // rebuild scratch: i + 1 at i's bonded partners
 
   // walls: current geometry and history
   std::vector<Vec3> plane_point_m;
@@ -93,7 +94,10 @@ struct Simulation::Impl {
   std::vector<std::vector<Triangle>> mesh_triangles;  // current pose
   std::vector<std::vector<Eigen::AlignedBox3d>> mesh_triangle_boxes;
   std::vector<Eigen::AlignedBox3d> mesh_boxes;
-  std::vector<std::vector<MeshSlot>> mesh_slots;      // [mesh][particle * kMeshSlots + slot]
+  std::vector<std::vector<MeshSlot>> mesh_slots;  // [mesh][particle * kMeshSlots + slot]
+  // Per particle, bit w (w < 63) or bit 63 (walls 63 and up): the particle may hold contact
+  // history with wall w. Far walls without history are skipped without touching their slots.
+  std::vector<std::uint64_t> wall_history;
   std::vector<const Interaction*> wall_interactions;  // [type * wall_count + wall]
   std::vector<double> wall_range_m;
 
@@ -112,9 +116,9 @@ struct Simulation::Impl {
   std::vector<std::uint32_t> scratch_u32;
   std::vector<PairState> scratch_states;
   std::vector<MeshSlot> scratch_slots;
+  std::vector<std::uint64_t> scratch_u64;
 
   double last_contact_energy_j = 0.0;
-  double last_bond_energy_j = 0.0;
   std::uint32_t next_body = 0;
   std::uint32_t next_id = 0;
 };
@@ -166,6 +170,7 @@ Simulation::Simulation(std::shared_ptr<const Model> model)
 Simulation::~Simulation() = default;
 
 int Simulation::thread_count() const { return impl_->threads; }
+int Simulation::active_thread_count() const { return impl_->active_threads; }
 
 void Simulation::reserve(std::size_t particles, std::size_t bonds) {
   State& s = state_;
@@ -300,7 +305,11 @@ void Simulation::prepare() {
 
   for (auto& states : m.plane_states) states.resize(n);
   for (auto& slots : m.mesh_slots) slots.resize(n * kMeshSlots);
-  const std::size_t threads = static_cast<std::size_t>(m.threads);
+  m.wall_history.resize(n, ~std::uint64_t{0});  // new particles: check every wall once
+  m.active_threads = static_cast<int>(std::clamp<std::size_t>(
+      n / static_cast<std::size_t>(std::max(1, spec.min_particles_per_thread)), 1,
+      static_cast<std::size_t>(m.threads)));
+  const std::size_t threads = static_cast<std::size_t>(m.active_threads);
   for (std::size_t t = 1; t < threads; ++t) {
     m.force_buffers[t].resize(n);
     m.torque_buffers[t].resize(n);
@@ -315,6 +324,7 @@ void Simulation::prepare() {
   m.scratch_u32.reserve(n);
   m.scratch_states.reserve(std::max(n, m.pair_states.capacity()));
   m.scratch_slots.reserve(n * kMeshSlots);
+  m.scratch_u64.reserve(n);
   const std::uint32_t listed = m.pair_offsets.empty() ? 0U : m.pair_offsets.back();
   m.pair_offsets.resize(n + 1, listed);  // new particles: empty lists until the rebuild
 
@@ -330,6 +340,7 @@ void Simulation::prepare() {
   m.particle_begin[0] = 0;
 
   update_wall_geometry();
+  m.partners_valid = false;
   m.prepared = true;
   m.rebuild_requested = true;
   rebuild_neighbors();
@@ -373,6 +384,11 @@ void Simulation::update_wall_geometry() {
 
 namespace {
 
+// History bit of a wall; walls 63 and up share the last bit.
+inline std::uint64_t wall_bit(std::size_t wall) {
+  return std::uint64_t{1} << std::min<std::size_t>(wall, 63);
+}
+
 inline std::uint32_t cell_coordinate(double x, double origin, double size, int dims) {
   const double c = std::floor((x - origin) / size);
   if (!(c > 0.0)) return 0;  // also NaN
@@ -403,6 +419,7 @@ void Simulation::sort_particles() {
   permute(m.particle_cell, m.scratch_u32, m.order);
   for (auto& states : m.plane_states) permute(states, m.scratch_states, m.order);
   for (auto& slots : m.mesh_slots) permute(slots, m.scratch_slots, m.order, kMeshSlots);
+  permute(m.wall_history, m.scratch_u64, m.order);
   for (Bond& bond : s.bonds) {
     bond.i = m.new_of_old[bond.i];
     bond.j = m.new_of_old[bond.j];
@@ -411,6 +428,7 @@ void Simulation::sort_particles() {
     c.i = m.new_of_old[c.i];
     c.j = m.new_of_old[c.j];
   }
+  m.partners_valid = false;
   ++stats_.particle_sorts;
 }
 
@@ -465,26 +483,25 @@ void Simulation::rebuild_neighbors() {
   }
 
   // 4. bonded partners (pairs excluded from contact unless configured)
-  m.partner_offsets.assign(n + 1, 0);
-  for (std::size_t k = 0; k < s.bonds.size(); ++k) {
-    if (s.bond_states[k].broken) continue;
-    ++m.partner_offsets[s.bonds[k].i + 1];
-    ++m.partner_offsets[s.bonds[k].j + 1];
-  }
-  for (std::size_t k = 0; k < n; ++k) m.partner_offsets[k + 1] += m.partner_offsets[k];
-  m.partner_particle.resize(m.partner_offsets[n]);
-  m.partner_bond.resize(m.partner_offsets[n]);
-  {
+  if (!m.partners_valid || m.partner_offsets.size() != n + 1) {
+    m.partner_offsets.assign(n + 1, 0);
+    for (std::size_t k = 0; k < s.bonds.size(); ++k) {
+      if (s.bond_states[k].broken) continue;
+      ++m.partner_offsets[s.bonds[k].i + 1];
+      ++m.partner_offsets[s.bonds[k].j + 1];
+    }
+    for (std::size_t k = 0; k < n; ++k) m.partner_offsets[k + 1] += m.partner_offsets[k];
+    m.partner_particle.resize(m.partner_offsets[n]);
     m.scratch_u32.assign(m.partner_offsets.begin(), m.partner_offsets.end() - 1);
     for (std::size_t k = 0; k < s.bonds.size(); ++k) {
       if (s.bond_states[k].broken) continue;
       const Bond& b = s.bonds[k];
-      m.partner_particle[m.scratch_u32[b.i]] = b.j;
-      m.partner_bond[m.scratch_u32[b.i]++] = static_cast<std::uint32_t>(k);
-      m.partner_particle[m.scratch_u32[b.j]] = b.i;
-      m.partner_bond[m.scratch_u32[b.j]++] = static_cast<std::uint32_t>(k);
+      m.partner_particle[m.scratch_u32[b.i]++] = b.j;
+      m.partner_particle[m.scratch_u32[b.j]++] = b.i;
     }
+    m.partners_valid = true;
   }
+  m.bonded_stamp.assign(n, 0);
 
   // 5. half neighbour list from the 27 surrounding cells
   std::sort(m.carried.begin(), m.carried.end(),
@@ -513,6 +530,9 @@ void Simulation::rebuild_neighbors() {
     const Vec3 xi = s.position_m[i];
     const double ri = s.radius_m[i];
     const std::uint32_t ti = s.type[i];
+    for (std::uint32_t p = m.partner_offsets[i]; p < m.partner_offsets[i + 1]; ++p) {
+      m.bonded_stamp[m.partner_particle[p]] = i + 1;
+    }
     const int cell = static_cast<int>(m.particle_cell[i]);
     const int cx = cell % dx;
     const int cy = (cell / dx) % dy;
@@ -530,13 +550,7 @@ void Simulation::rebuild_neighbors() {
           if (!interaction.has_contact()) continue;
           const double reach = ri + s.radius_m[j] + m.pair_range_m[pair_type] + m.skin;
           if ((xi - s.position_m[j]).squaredNorm() >= reach * reach) continue;
-          if (!interaction.contact_between_bonded) {
-            bool bonded = false;
-            for (std::uint32_t p = m.partner_offsets[i]; p < m.partner_offsets[i + 1]; ++p) {
-              bonded = bonded || m.partner_particle[p] == j;
-            }
-            if (bonded) continue;
-          }
+          if (!interaction.contact_between_bonded && m.bonded_stamp[j] == i + 1) continue;
           m.pair_j.push_back(j);
         }
       }
@@ -562,7 +576,7 @@ void Simulation::rebuild_neighbors() {
   std::copy(s.position_m.begin(), s.position_m.end(), m.build_position_m.begin());
 
   // 6. thread ranges balanced by pair count (plus a share per particle for walls)
-  const std::size_t threads = static_cast<std::size_t>(m.threads);
+  const std::size_t threads = static_cast<std::size_t>(m.active_threads);
   const double total = static_cast<double>(m.pair_j.size()) + 2.0 * static_cast<double>(n);
   std::uint32_t i = 0;
   m.particle_begin[0] = 0;
@@ -595,7 +609,7 @@ void Simulation::compute_forces() {
   const std::size_t wall_count = planes + meshes;
   const double dt = m.dt;
 
-#pragma omp parallel num_threads(m.threads)
+#pragma omp parallel num_threads(m.active_threads) if (m.active_threads > 1)
   {
     const auto t = static_cast<std::size_t>(omp_get_thread_num());
     Vec3* force = t == 0 ? s.force_n.data() : m.force_buffers[t].data();
@@ -666,39 +680,28 @@ void Simulation::compute_forces() {
       torque[i] += torque_i;
     }
 
-    // bonds
-    for (std::uint32_t k = m.bond_begin[t]; k < m.bond_begin[t + 1]; ++k) {
-      BondState& bond_state = s.bond_states[k];
-      if (bond_state.broken) continue;
-      const Bond& bond = s.bonds[k];
-      const std::uint32_t i = bond.i;
-      const std::uint32_t j = bond.j;
-      const Vec3 d = x[i] - x[j];
-      BondGeometry g;
-      g.distance_m = d.norm();
-      g.normal = d / g.distance_m;
-      const double ri = radius[i];
-      const double rj = radius[j];
-      const double arm_i = g.distance_m * ri / (ri + rj);  // bond point between the centres
-      const double arm_j = g.distance_m - arm_i;
-      g.relative_velocity_m_per_s = v[i] - v[j] - (arm_i * w[i] + arm_j * w[j]).cross(g.normal);
-      g.rest_length_m = bond.rest_length_m;
-      g.bond_radius_m = bond.bond_radius_m;
-      g.break_distance_m = bond.break_distance_m;
-      g.timestep_s = dt;
-      BondForce bf;
-      m.bond_laws[k]->compute(g, bond_state, bf);
-      if (bond_state.broken) {
-        tally.bond_broke = true;
-        continue;
+    // bonds: one batch per run of bonds with the same law (a body's bonds are contiguous)
+    {
+      BondBatch batch;
+      batch.bonds = s.bonds.data();
+      batch.states = s.bond_states.data();
+      batch.position_m = x;
+      batch.velocity_m_per_s = v;
+      batch.angular_velocity_rad_per_s = w;
+      batch.radius_m = radius;
+      batch.force_n = force;
+      batch.torque_nm = torque;
+      batch.timestep_s = dt;
+      const std::uint32_t bonds_end = m.bond_begin[t + 1];
+      for (std::uint32_t k = m.bond_begin[t]; k < bonds_end;) {
+        const BondLaw* law = m.bond_laws[k];
+        std::uint32_t run_end = k + 1;
+        while (run_end < bonds_end && m.bond_laws[run_end] == law) ++run_end;
+        batch.begin = k;
+        batch.end = run_end;
+        tally.bond_broke = law->compute_batch(batch) || tally.bond_broke;
+        k = run_end;
       }
-      const Vec3 f = bf.normal_force_n * g.normal + bf.shear_force_n;
-      const Vec3 t_cross_n = bf.shear_force_n.cross(g.normal);
-      force[i] += f;
-      force[j] -= f;
-      torque[i] += arm_i * t_cross_n + bf.torque_on_i_nm;
-      torque[j] += arm_j * t_cross_n + bf.torque_on_j_nm;
-      tally.bond_energy_j += bf.elastic_energy_j;
     }
 
     // walls
@@ -735,24 +738,28 @@ void Simulation::compute_forces() {
           torque[i] += ri * tangential.cross(normal) + acc.torque_on_i_nm;
           tally.contact_energy_j += acc.elastic_energy_j;
         };
+        std::uint64_t history = m.wall_history[i];
+        std::uint64_t history_next = 0;
         for (std::size_t p = 0; p < planes; ++p) {
           const double gap = (xi - m.plane_point_m[p]).dot(m.plane_normal[p]);
           const double overlap = ri - gap;
-          PairState& pair_state = m.plane_states[p][i];
+          const std::uint64_t bit = wall_bit(p);
           if (overlap <= -m.wall_range_m[wall_row + p]) {
-            if (pair_state.flags != 0 || !pair_state.tangential_displacement_m.isZero(0.0)) {
-              pair_state.reset();
-            }
+            if ((history & bit) != 0) m.plane_states[p][i].reset();
             continue;
           }
-          apply(p, m.plane_normal[p], overlap, xi - gap * m.plane_normal[p], pair_state);
+          history_next |= bit;
+          apply(p, m.plane_normal[p], overlap, xi - gap * m.plane_normal[p], m.plane_states[p][i]);
         }
         for (std::size_t mesh = 0; mesh < meshes; ++mesh) {
           const std::size_t wall = planes + mesh;
           const double reach = ri + m.wall_range_m[wall_row + wall];
+          const std::uint64_t bit = wall_bit(wall);
+          const bool near = m.mesh_boxes[mesh].exteriorDistance(xi) < reach;
+          if (!near && (history & bit) == 0) continue;  // far, nothing to forget
           MeshSlot* slots = &m.mesh_slots[mesh][i * kMeshSlots];
           int candidates = 0;
-          if (m.mesh_boxes[mesh].exteriorDistance(xi) < reach) {
+          if (near) {
             const auto& triangles = m.mesh_triangles[mesh];
             const auto& boxes = m.mesh_triangle_boxes[mesh];
             for (std::size_t tri = 0; tri < triangles.size() && candidates < 16; ++tri) {
@@ -796,6 +803,7 @@ void Simulation::compute_forces() {
             }
             if (!still) slots[q] = MeshSlot{};
           }
+          if (kept > 0) history_next |= bit;
           for (int e = 0; e < kept; ++e) {
             const auto c = static_cast<std::size_t>(kept_candidate[static_cast<std::size_t>(e)]);
             const ClosestPoint& cp = candidate_point[c];
@@ -814,14 +822,15 @@ void Simulation::compute_forces() {
             apply(wall, offset / distance, ri - distance, cp.point_m, slots[slot].state);
           }
         }
+        m.wall_history[i] = history_next;
       }
     }
     m.tallies[t] = tally;
 
 #pragma omp barrier
-    if (m.threads > 1) {
+    if (m.active_threads > 1) {
       for (std::uint32_t k = i_begin; k < i_end; ++k) {
-        for (std::size_t b = 1; b < static_cast<std::size_t>(m.threads); ++b) {
+        for (std::size_t b = 1; b < static_cast<std::size_t>(m.active_threads); ++b) {
           s.force_n[k] += m.force_buffers[b][k];
           s.torque_nm[k] += m.torque_buffers[b][k];
         }
@@ -830,20 +839,19 @@ void Simulation::compute_forces() {
   }
 
   double contact_energy = 0.0;
-  double bond_energy = 0.0;
   std::size_t touching = 0;
   bool broke = false;
-  for (const ThreadTally& tally : m.tallies) {
+  for (std::size_t t = 0; t < static_cast<std::size_t>(m.active_threads); ++t) {
+    const ThreadTally& tally = m.tallies[t];
     contact_energy += tally.contact_energy_j;
-    bond_energy += tally.bond_energy_j;
     touching += tally.touching;
     broke = broke || tally.bond_broke;
   }
   m.last_contact_energy_j = contact_energy;
-  m.last_bond_energy_j = bond_energy;
   stats_.touching_pairs = touching;
   if (broke) {
     m.rebuild_requested = true;  // the freed pair may touch: list it for contact
+    m.partners_valid = false;
     std::size_t count = 0;
     for (const BondState& b : s.bond_states) count += b.broken ? 1 : 0;
     stats_.broken_bonds = count;
@@ -870,7 +878,7 @@ void Simulation::step(std::size_t count) {
 
   for (std::size_t iteration = 0; iteration < count; ++iteration) {
     bool rebuild = m.rebuild_requested;
-#pragma omp parallel num_threads(m.threads) reduction(|| : rebuild)
+#pragma omp parallel num_threads(m.active_threads) if (m.active_threads > 1) reduction(|| : rebuild)
     {
       const auto t = static_cast<std::size_t>(omp_get_thread_num());
       const std::uint32_t begin = m.particle_begin[t];
@@ -900,7 +908,7 @@ void Simulation::step(std::size_t count) {
     }
     if (rebuild) rebuild_neighbors();
     compute_forces();
-#pragma omp parallel for num_threads(m.threads) schedule(static)
+#pragma omp parallel for num_threads(m.active_threads) if (m.active_threads > 1) schedule(static)
     for (std::size_t k = 0; k < n; ++k) {
       s.velocity_m_per_s[k] += half_dt * (s.force_n[k] * s.inverse_mass_per_kg[k] + gravity);
       s.angular_velocity_rad_per_s[k] += half_dt * s.inverse_inertia_per_kg_m2[k] * s.torque_nm[k];
@@ -925,7 +933,11 @@ EnergyReport Simulation::energy() const {
     report.gravitational_j -= mass * gravity.dot(s.position_m[k]);
   }
   report.contact_elastic_j = impl_->last_contact_energy_j;
-  report.bond_elastic_j = impl_->last_bond_energy_j;
+  for (std::size_t k = 0; k < s.bonds.size(); ++k) {  // from the bond states of the last step
+    if (s.bond_states[k].broken) continue;
+    const BondLaw& law = *model_->interaction(s.type[s.bonds[k].i], s.type[s.bonds[k].j]).bond_law;
+    report.bond_elastic_j += law.elastic_energy_j(s.bond_states[k], s.bonds[k].bond_radius_m);
+  }
   return report;
 }
 

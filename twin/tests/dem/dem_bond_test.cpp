@@ -196,6 +196,7 @@ State run_bed(int threads) {
   ModelSpec spec =
       test::ball_model({test::hertz(0.5), test::coulomb(0.3)}, 1e-4, Vec3(0, 0, -9.81), true);
   spec.thread_count = threads;
+  spec.min_particles_per_thread = 1;  // 800 spheres: make the 2-thread path run
   spec.sort_every_rebuilds = 3;
   Simulation sim(std::make_shared<Model>(spec));
   std::mt19937 random(42);
@@ -209,6 +210,20 @@ State run_bed(int threads) {
   sim.wall("floor").surface_velocity_m_per_s = Vec3(0.3, 0, 0);
   sim.step(1500);
   return sim.state();
+}
+
+TEST(DemDeterminism, SmallSystemsRunOnFewerThreads) {
+  ModelSpec spec = test::ball_model({test::hertz(0.5)}, 1e-4, Vec3(0, 0, -9.81), true);
+  spec.thread_count = 2;
+  spec.min_particles_per_thread = 3;  // 5 spheres: one thread; 6: two
+  Simulation sim(std::make_shared<Model>(spec));
+  for (int k = 0; k < 5; ++k) sim.add_sphere({Vec3(0.01 * k, 0, 0.005), kRadius, 0});
+  sim.step(1);
+  EXPECT_EQ(sim.active_thread_count(), 1);
+  sim.add_sphere({Vec3(0.05, 0, 0.005), kRadius, 0});
+  sim.step(1);
+  EXPECT_EQ(sim.active_thread_count(), 2);
+  EXPECT_EQ(sim.thread_count(), 2);
 }
 
 TEST(DemDeterminism, SameSeedSameThreadsBitIdentical) {

@@ -138,11 +138,37 @@ struct BondForce {
   double elastic_energy_j = 0.0;
 };
 
+struct Bond;  // state.hpp
+
+// One thread's share of a run of bonds that use the same law: the engine's arrays and the
+// thread's force and torque buffers. A law's compute_batch() handles bonds [begin, end).
+struct BondBatch {
+  const Bond* bonds = nullptr;
+  BondState* states = nullptr;
+  std::uint32_t begin = 0;
+  std::uint32_t end = 0;
+  const Vec3* position_m = nullptr;
+  const Vec3* velocity_m_per_s = nullptr;
+  const Vec3* angular_velocity_rad_per_s = nullptr;
+  const double* radius_m = nullptr;
+  Vec3* force_n = nullptr;
+  Vec3* torque_nm = nullptr;
+  double timestep_s = 0.0;
+};
+
 class BondLaw {
  public:
   virtual ~BondLaw() = default;
   // Updates the state and the force; sets state.broken (and leaves no force) when it breaks.
   virtual void compute(const BondGeometry& geometry, BondState& state, BondForce& force) const = 0;
+  // The step loop's entry: every unbroken bond of the batch (geometry, compute, forces and
+  // torques on both particles); returns true if a bond broke. The default calls compute() per
+  // bond; a law overrides it with run_bond_batch() (laws.cpp) so that its per-bond code inlines
+  // (one virtual call per run of bonds instead of one per bond, as a LAMMPS bond style).
+  virtual bool compute_batch(const BondBatch& batch) const;
+  // Elastic energy held in a bond's state (energy reports; kept out of the step loop).
+  [[nodiscard]] virtual double elastic_energy_j(const BondState& state,
+                                                double bond_radius_m) const = 0;
   // Spring constants (N/m) of a bond of this radius, for the timestep check.
   [[nodiscard]] virtual double normal_stiffness_n_per_m(double bond_radius_m) const = 0;
   [[nodiscard]] virtual double shear_stiffness_n_per_m(double bond_radius_m) const = 0;

@@ -4,7 +4,8 @@
 // Per step: half kick, drift, wall motion, neighbour-list check (Verlet skin: rebuild when a
 // particle moved more than skin/2 or a bond broke), forces (pairs, bonds, walls), half kick.
 //
-// Threads: `ModelSpec::thread_count` OpenMP threads. Each thread owns a contiguous range of
+// Threads: up to `ModelSpec::thread_count` OpenMP threads, one per
+// `ModelSpec::min_particles_per_thread` particles. Each thread owns a contiguous range of
 // particles (pairs i<j are listed under i) and of bonds, and accumulates into its own force
 // buffer; buffers are summed in thread order. Results are bit-identical for a fixed thread count.
 //
@@ -113,7 +114,8 @@ class Simulation {
   [[nodiscard]] EnergyReport energy() const;
   [[nodiscard]] const SimulationStats& stats() const { return stats_; }
   [[nodiscard]] TimestepReport check_timestep() const;
-  [[nodiscard]] int thread_count() const;
+  [[nodiscard]] int thread_count() const;         // at most (ModelSpec::thread_count)
+  [[nodiscard]] int active_thread_count() const;  // for the current particle count
 
  private:
   struct Impl;
