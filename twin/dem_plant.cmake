@@ -6,7 +6,9 @@ if(NOT FL_TWIN_DEM_PLANT_SOURCES OR NOT TARGET fl_twin_dem OR NOT TARGET fl_twin
 endif()
 add_library(fl_twin_dem_plant STATIC ${FL_TWIN_DEM_PLANT_SOURCES})
 target_include_directories(fl_twin_dem_plant PUBLIC ${CMAKE_CURRENT_LIST_DIR}/include)
-target_link_libraries(fl_twin_dem_plant PUBLIC fl_twin_dem fl_twin_fillet fl_twin_fast
+# fl_twin_fast for the shared plant_fast.yaml loader; fl_twin_sensors for the drive and camera
+# emulators both plants use.
+target_link_libraries(fl_twin_dem_plant PUBLIC fl_twin_dem fl_twin_fillet fl_twin_sensors fl_twin_fast
                                                fl_controller_config PRIVATE fl_build_flags)
 
 if(FL_BUILD_TESTS)

@@ -44,7 +44,7 @@ void DemPlant::step_infeed(double h_s, const OutputImage& out) {
                                               static_cast<double>(config.hopper_max_opening_mm));
   infeed_.hopper_opening_mm = approach(infeed_.hopper_opening_mm, opening_target_mm,
                                        config.hopper_cylinder_speed_mmps * h_s);
-  const double bulk_mps = drives_[index(DriveId::kBulk)].speed_mps;
+  const double bulk_mps = drives_.speed_mps(DriveId::kBulk);
   const double layer_mm = infeed_.backlog_fillets * config.layer_mm_per_fillet;
   if (bulk_mps > 0.0 && layer_mm < config.layer_max_mm) {
     infeed_.backlog_fillets +=
@@ -81,7 +81,7 @@ void DemPlant::step_infeed(double h_s, const OutputImage& out) {
   spawn.s_mm = (entry_m + half_s_m + 0.002) / kMm;
   spawn.y_mm = y_mm;
   spawn.angle_rad = next.angle_rad;
-  spawn.v_mps = drives_[index(DriveId::kTakt)].speed_mps;
+  spawn.v_mps = drives_.speed_mps(DriveId::kTakt);
   spawn.variant = next.variant;
   spawn.side = next.side;
   spawn.touching_pair = next.pair;

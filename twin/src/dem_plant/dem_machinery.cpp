@@ -1,5 +1,6 @@
-// Machinery of the DEM plant: drives (ramps, encoders), station actuators, the walls they
-// move, and the events a fillet meets (feeding across the barrier, flips, squeeze, exits).
+// Machinery of the DEM plant: station actuators, the walls they move (belt surfaces at the
+// shared drive emulator's speeds), and the events a fillet meets (feeding across the barrier,
+// flips, squeeze, exits).
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -21,35 +22,6 @@ double approach(double value, double target, double max_step) {
 constexpr double kTeleportM = 0.005;
 
 }  // namespace
-
-void DemPlant::step_drives(double h_s, const OutputImage& delayed) {
-  // As the fast plant: ramp within the drive's limits after the command delay, encoder counts
-  // from the integrated travel; the safety chain stops every drive.
-  const bool powered = !faults_.estop_open;
-  for (std::size_t d = 0; d < kDriveCount; ++d) {
-    DriveState& drive = drives_[d];
-    const DriveLimits& limits = line_.limits[d];
-    const DriveCommand& command = delayed.drives[d];
-    drive.fault = faults_.drive_fault[d];
-    const bool enabled = powered && command.enable && !drive.fault;
-    double target_mps = 0.0;
-    double accel_mps2 = limits.max_accel_mps2;
-    if (enabled) {
-      const double max_speed_mps = limits.max_speed_mps;
-      target_mps =
-          std::clamp(static_cast<double>(command.speed_mps), -max_speed_mps, max_speed_mps);
-      if (command.accel_mps2 > 0.0F) {
-        accel_mps2 = std::min(static_cast<double>(command.accel_mps2), accel_mps2);
-      }
-    }
-    const double old_mps = drive.speed_mps;
-    drive.speed_mps = approach(old_mps, target_mps, accel_mps2 * h_s);
-    drive.position_mm += 0.5 * (old_mps + drive.speed_mps) * h_s * 1000.0;
-    drive.encoder_counts =
-        static_cast<std::int64_t>(std::floor(drive.position_mm * limits.counts_per_mm));
-    drive.ready = enabled;
-  }
-}
 
 void DemPlant::step_stations(double h_s, const OutputImage& out) {
   Stations& st = stations_;
@@ -97,9 +69,10 @@ void DemPlant::command_walls(double h_s) {
   dem::State& s = sim_->mutable_state();
   for (std::size_t d = 0; d < kDriveCount; ++d) {
     if (wall_belt_[d] == static_cast<std::size_t>(-1)) continue;
-    s.walls[wall_belt_[d]].surface_velocity_m_per_s = Vec3(drives_[d].speed_mps, 0.0, 0.0);
+    s.walls[wall_belt_[d]].surface_velocity_m_per_s =
+        Vec3(drives_.speed_mps(static_cast<DriveId>(d)), 0.0, 0.0);
   }
-  const double guide_mps = drives_[index(DriveId::kGuide)].speed_mps;
+  const double guide_mps = drives_.speed_mps(DriveId::kGuide);
   s.walls[wall_plate1_].surface_velocity_m_per_s = Vec3(guide_mps, 0.0, 0.0);
   s.walls[wall_plate2_].surface_velocity_m_per_s = Vec3(guide_mps, 0.0, 0.0);
 
@@ -125,7 +98,7 @@ void DemPlant::command_walls(double h_s) {
   drive_wall(roller, Vec3(0.0, 0.0, -drop_m * st.roller_travel));
   // Rolling with the squeeze belt: the bottom line moves at the belt's speed.
   roller.angular_velocity_rad_per_s =
-      Vec3(0.0, -drives_[index(DriveId::kSqueeze)].speed_mps / (m.roller_radius_mm * kMm), 0.0);
+      Vec3(0.0, -drives_.speed_mps(DriveId::kSqueeze) / (m.roller_radius_mm * kMm), 0.0);
   if (teleported) sim_->prepare();  // new wall geometry without a motion step
 }
 
@@ -172,7 +145,7 @@ void DemPlant::apply_events(const OutputImage& out) {
   const double knife_window_m = config_.shared.final_reject.window_half_mm * kMm;
   const double reject_start_m = line_.sections[index(DriveId::kReject)].start_mm * kMm;
   const double reject_end_m = line_.sections[index(DriveId::kReject)].end_mm * kMm;
-  const double reject_mps = drives_[index(DriveId::kReject)].speed_mps;
+  const double reject_mps = drives_.speed_mps(DriveId::kReject);
   const double placed_m = line_.placed_at_s_mm * kMm;
   const DemLossConfig& losses = config_.losses;
   const double half_w = config_.machinery.belt_half_width_mm * kMm;
@@ -225,14 +198,18 @@ void DemPlant::apply_events(const OutputImage& out) {
       f.progress_s_m = s_m;
       f.progress_ns = time_ns_;
     }
-    const bool belt_runs = std::abs(drives_[index(drive_under(s_m))].speed_mps) > 0.05;
+    const bool belt_runs = std::abs(drives_.speed_mps(drive_under(s_m))) > 0.05;
     if (!belt_runs) f.progress_ns = time_ns_;  // a held belt is not a stuck fillet
     // Exits.
     if (stations_.knife_blowing && std::abs(s_m - knife_m) <= knife_window_m) {
       record_exit(f, TrueExit::kFinalReject);
       f.remove = true;
     } else if (reject_mps < 0.0 && f.velocity_mps.x() < 0.0 && s_m < reject_end_m &&
+               f.upper_m.x() > reject_start_m &&
                f.lower_m.x() < reject_start_m - losses.crate_overhang_mm * kMm) {
+      // Only a fillet the reversing belt carries back over its upstream edge: its front still
+      // over the reject belt. Without that test every fillet upstream (on the plates, the
+      // held guide, the takt belt) that rocked backwards during a reversal went to the crate.
       record_exit(f, TrueExit::kRejectCrate);
       f.remove = true;
     } else if (s_m >= placed_m) {

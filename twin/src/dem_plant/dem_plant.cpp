@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 
@@ -16,15 +17,12 @@ namespace {
 
 using dem::Vec3;
 
-std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t stream) {
-  std::uint64_t z = seed ^ (stream * 0xD1B54A32D192ED03ULL);
-  z = (z ^ (z >> 30U)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27U)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31U);
-}
-
 std::int64_t to_ns(double seconds) { return std::llround(seconds * 1e9); }
 constexpr double kMm = 1e-3;
+
+std::int64_t control_step_ns(const DemPlantConfig& config) {
+  return std::max<std::int64_t>(1, to_ns(config.simulation.control_step_s));
+}
 
 // A rectangle as two triangles (corners in order around it).
 void add_quad(dem::MeshWallSpec& mesh, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
@@ -171,10 +169,12 @@ std::shared_ptr<const dem::Model> DemPlant::build_model() const {
 }
 
 DemPlant::DemPlant(const LineConfig& line, const DemPlantConfig& config)
-    : line_(line), config_(config) {
+    : line_(line),
+      config_(config),
+      step_ns_(control_step_ns(config)),
+      drives_(line.limits, static_cast<double>(config.shared.belts.drive_delay_s)),
+      cameras_(line.cameras, config.shared.cameras, control_step_ns(config)) {
   if (config_.simulation.max_fillets == 0) throw std::invalid_argument("max_fillets must be > 0");
-  step_ns_ = std::max<std::int64_t>(1, to_ns(config_.simulation.control_step_s));
-  drive_delay_ns_ = std::max<std::int64_t>(0, to_ns(config_.shared.belts.drive_delay_s));
   templates_ = dem_plant_detail::make_templates(config_.simulation.sub_particle_radius_mm * kMm);
   for (const dem::FilletTemplate& t : templates_) {
     std::vector<dem::BodyBond> bonds;
@@ -205,36 +205,26 @@ void DemPlant::reset(std::uint64_t seed, InputImage& in) {
   counters_ = DemPlantCounters{};
   faults_ = DemPlantFaults{};
   time_ns_ = 0;
-  drives_ = {};
+  drives_.reset();
   stations_ = Stations{};
   infeed_ = Infeed{};
   fillets_.clear();
   fillet_of_body_.clear();
   exit_count_ = 0;
   exits_drained_ = 0;
-  command_count_ = 0;
-  command_head_ = 0;
   last_plant_id_ = 0;
   last_group_id_ = 0;
   beam_ = false;
   feed_rng_.seed_with(stream_seed(seed, 1));
   body_rng_.seed_with(stream_seed(seed, 2));
   sensor_rng_.seed_with(stream_seed(seed, 3));
-  for (std::size_t c = 0; c < kCameraCount; ++c) {
-    camera_rngs_[c].seed_with(stream_seed(seed, 16 + c));
-  }
   const FastInfeedConfig& infeed = config_.shared.infeed;
   infeed_.hopper_opening_mm = std::clamp(static_cast<double>(infeed.hopper_initial_opening_mm),
                                          static_cast<double>(infeed.hopper_min_opening_mm),
                                          static_cast<double>(infeed.hopper_max_opening_mm));
   draw_next_feed();
   std::memset(static_cast<void*>(&image_), 0, sizeof(image_));
-  for (std::size_t c = 0; c < kCameraCount; ++c) {
-    cameras_[c].sequence = 0;
-    cameras_[c].pending_count = 0;
-    cameras_[c].last_frame_time_ns = 0;
-    schedule_exposure(static_cast<CameraId>(c), true);
-  }
+  cameras_.reset(seed, time_ns_);
   write_image(in);
 }
 
@@ -245,33 +235,48 @@ void DemPlant::step(const OutputImage& out, std::int64_t dt_ns, InputImage& in) 
     exit_count_ = left;
     exits_drained_ = 0;
   }
-  command_head_ = (command_head_ + 1) % kCommandHistory;
-  commands_[command_head_].arrival_ns = time_ns_;
-  commands_[command_head_].out = out;
-  command_count_ = std::min(command_count_ + 1, kCommandHistory);
+  drives_.command(out.drives, time_ns_);
   std::int64_t remaining = dt_ns;
   while (remaining > 0) {
     const std::int64_t h_ns = std::min(remaining, step_ns_);
     control_step(h_ns, out);
     remaining -= h_ns;
   }
-  publish_frames();
+  cameras_.publish(time_ns_, faults_.cameras, image_.cameras);
   write_image(in);
 }
 
-const OutputImage& DemPlant::delayed_command(std::int64_t at_ns) const {
-  for (std::size_t i = 0; i < command_count_; ++i) {
-    const std::size_t slot = (command_head_ + kCommandHistory - i) % kCommandHistory;
-    if (commands_[slot].arrival_ns + drive_delay_ns_ <= at_ns) return commands_[slot].out;
+// The fillets as the cameras see them, in the plant's order; pose and contact are computed
+// only for a fillet in a camera's view (an SVD and a sphere-pair scan each).
+class DemPlant::FilletScene final : public CameraScene {
+ public:
+  explicit FilletScene(const DemPlant& plant) : plant_(plant) {}
+  [[nodiscard]] std::size_t size() const override { return plant_.fillets_.size(); }
+  [[nodiscard]] double s_mm(std::size_t item) const override {
+    const Fillet& fillet = plant_.fillets_[item];
+    // A fillet without spheres (taken out this step) is in no camera's view.
+    if (fillet.particles.empty()) return std::numeric_limits<double>::infinity();
+    return fillet.centroid_m.x() / kMm;
   }
-  if (command_count_ == kCommandHistory)
-    return commands_[(command_head_ + 1) % kCommandHistory].out;
-  return idle_command_;
+  [[nodiscard]] CameraTruth truth(std::size_t item) const override {
+    const Fillet& fillet = plant_.fillets_[item];
+    const Pose pose = plant_.fit_pose(fillet);
+    return {fillet.centroid_m.y() / kMm, pose.angle_rad, plant_.hand_of(fillet), pose.side,
+            plant_.touching(item)};
+  }
+
+ private:
+  const DemPlant& plant_;
+};
+
+Hand DemPlant::hand_of(const Fillet& fillet) const {
+  return templates_[fillet.variant].name.ends_with("_left") ? Hand::kLeft : Hand::kRight;
 }
 
 void DemPlant::control_step(std::int64_t h_ns, const OutputImage& out) {
   const double h_s = static_cast<double>(h_ns) * 1e-9;
-  step_drives(h_s, delayed_command(time_ns_));
+  // The safety chain cuts every drive (STO).
+  drives_.step(time_ns_, h_s, faults_.drive_fault, !faults_.estop_open);
   step_stations(h_s, out);
   command_walls(h_s);
   // The engine runs whole steps up to the control step's end (its clock never runs ahead by
@@ -287,7 +292,7 @@ void DemPlant::control_step(std::int64_t h_ns, const OutputImage& out) {
   apply_events(out);
   step_infeed(h_s, out);
   beam_ = beam_broken();
-  capture_frames();
+  cameras_.capture_due(time_ns_, FilletScene(*this), faults_.cameras);
 }
 
 // ---------------------------------------------------------------- particles and poses
@@ -468,7 +473,7 @@ void DemPlant::record_exit(const Fillet& fillet, TrueExit exit) {
   record.group_id = fillet.group_id;
   record.time_ns = time_ns_;
   record.exit = exit;
-  record.hand = templates_[fillet.variant].name.ends_with("_left") ? Hand::kLeft : Hand::kRight;
+  record.hand = hand_of(fillet);
   record.side = pose.side;
   record.angle_rad = static_cast<float>(pose.angle_rad);
   record.y_mm = static_cast<float>(fillet.centroid_m.y() / kMm);
@@ -549,7 +554,7 @@ std::vector<DemFilletView> DemPlant::fillets() const {
     DemFilletView v;
     v.plant_id = fillet.plant_id;
     v.group_id = fillet.group_id;
-    v.hand = templates_[fillet.variant].name.ends_with("_left") ? Hand::kLeft : Hand::kRight;
+    v.hand = hand_of(fillet);
     v.side = pose.side;
     v.s_mm = fillet.centroid_m.x() / kMm;
     v.y_mm = fillet.centroid_m.y() / kMm;
@@ -571,12 +576,7 @@ std::vector<DemFilletView> DemPlant::fillets() const {
 void DemPlant::write_image(InputImage& in) {
   InputImage& image = image_;
   image.time_ns = time_ns_;
-  for (std::size_t d = 0; d < kDriveCount; ++d) {
-    image.drives[d].speed_mps = static_cast<float>(drives_[d].speed_mps);
-    image.drives[d].encoder_counts = drives_[d].encoder_counts;
-    image.drives[d].ready = drives_[d].ready;
-    image.drives[d].fault = drives_[d].fault;
-  }
+  drives_.write(image.drives);
   const FastInfeedConfig& infeed = config_.shared.infeed;
   const double layer_mm = infeed_.backlog_fillets * infeed.layer_mm_per_fillet;
   infeed_.level_reading_mm =

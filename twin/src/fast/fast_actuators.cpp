@@ -1,5 +1,5 @@
-// Drives and station actuators: belt motors with ramps and encoders, flip plates, centring
-// pusher, squeeze roller and the final air knife.
+// Station actuators: flip plates, centring pusher, squeeze roller and the final air knife
+// (the belt drives are the shared DriveEmulator).
 #include <algorithm>
 #include <cmath>
 
@@ -15,38 +15,6 @@ double approach(double value, double target, double max_step) {
 }
 
 }  // namespace
-
-void FastPlant::step_drives(double h_s, const OutputImage& delayed) {
-  // The safety chain cuts every drive (STO): it stops and reports not ready.
-  const bool powered = !faults_.estop_open;
-  for (std::size_t d = 0; d < kDriveCount; ++d) {
-    FastDriveState& drive = state_.drives[d];
-    const DriveLimits& limits = line_.limits[d];
-    const DriveCommand& command = delayed.drives[d];
-    drive.fault = faults_.drive_fault[d];
-    const bool enabled = powered && command.enable && !drive.fault;
-    const double max_accel_mps2 = limits.max_accel_mps2;
-    double target_mps = 0.0;
-    // Disabled or tripped: quick-stop ramp at the drive's limit.
-    double accel_mps2 = max_accel_mps2;
-    if (enabled) {
-      const double max_speed_mps = limits.max_speed_mps;
-      target_mps =
-          std::clamp(static_cast<double>(command.speed_mps), -max_speed_mps, max_speed_mps);
-      // A command ramp of zero (or less) means "as fast as allowed".
-      if (command.accel_mps2 > 0.0F) {
-        accel_mps2 = std::min(static_cast<double>(command.accel_mps2), max_accel_mps2);
-      }
-    }
-    const double old_mps = drive.speed_mps;
-    drive.speed_mps = approach(old_mps, target_mps, accel_mps2 * h_s);
-    // Trapezoid: exact for the piecewise-linear speed of a ramp.
-    drive.position_mm += 0.5 * (old_mps + drive.speed_mps) * h_s * 1000.0;
-    drive.encoder_counts =
-        static_cast<std::int64_t>(std::floor(drive.position_mm * limits.counts_per_mm));
-    drive.ready = enabled;
-  }
-}
 
 void FastPlant::step_stations(double h_s, const OutputImage& out) {
   FastStationState& stations = state_.stations;

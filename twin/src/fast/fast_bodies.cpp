@@ -91,7 +91,7 @@ void FastPlant::step_bodies(double h_s, const OutputImage& out) {
   const double track_mm = std::max(static_cast<double>(line_.multilane.belt_track_mm), 1e-6);
   const double max_omega = multilane.max_omega_radps;
   const double reject_start_mm = line_.sections[index(DriveId::kReject)].start_mm;
-  const double reject_mps = state_.drives[index(DriveId::kReject)].speed_mps;
+  const double reject_mps = drives_.speed_mps(DriveId::kReject);
   const double roller_mm = line_.squeeze.roller_s_mm;
   const double knife_mm = line_.tolerance.final_reject_s_mm;
   const double centring_mm = line_.centring.s_mm;
@@ -138,13 +138,13 @@ void FastPlant::step_bodies(double h_s, const OutputImage& out) {
         break;
       case BodyZone::kBelt:
       case BodyZone::kGuide:
-        surface_mps = state_.drives[index(body.drive)].speed_mps;
+        surface_mps = drives_.speed_mps(body.drive);
         on_reject_belt = body.drive == DriveId::kReject;
         break;
       case BodyZone::kPlates:
         // Items slide over the plates at the guide belt's speed; a reversing reject belt
         // drags back an item whose front edge is on it (collateral of a reversal).
-        surface_mps = state_.drives[index(DriveId::kGuide)].speed_mps;
+        surface_mps = drives_.speed_mps(DriveId::kGuide);
         if (reject_mps < 0.0 && body.s_mm + body.half_extent_s_mm > reject_start_mm) {
           surface_mps = reject_mps;
           on_reject_belt = true;
@@ -152,8 +152,8 @@ void FastPlant::step_bodies(double h_s, const OutputImage& out) {
         break;
       case BodyZone::kMultilane1:
       case BodyZone::kMultilane2: {
-        vl_mps = state_.drives[index(body.drive)].speed_mps;
-        vr_mps = state_.drives[index(right_drive_of(body.zone))].speed_mps;
+        vl_mps = drives_.speed_mps(body.drive);
+        vr_mps = drives_.speed_mps(right_drive_of(body.zone));
         surface_mps = 0.5 * (vl_mps + vr_mps);
         // Rigid rotation at omega (CCW, seen from above) moves the item's right side
         // (y < 0) forward at v + omega * track / 2 and the left at v - omega * track / 2,

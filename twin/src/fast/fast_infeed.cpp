@@ -83,7 +83,7 @@ void FastPlant::step_infeed(double h_s, const OutputImage& out) {
 
   // Blockage (thesis 6.1): likely at a small opening while the belt pulls, cleared by opening
   // further or, rarely, by itself.
-  const double bulk_mps = state_.drives[index(DriveId::kBulk)].speed_mps;
+  const double bulk_mps = drives_.speed_mps(DriveId::kBulk);
   if (infeed.hopper_blocked) {
     const bool opened =
         infeed.hopper_opening_mm >= infeed.blocked_at_opening_mm + config.unblock_opening_delta_mm;
@@ -153,7 +153,7 @@ void FastPlant::step_infeed(double h_s, const OutputImage& out) {
   body.group_id = next_group_id();
   for (std::uint8_t m = 0; m < body.member_count; ++m) body.members[m].plant_id = next_plant_id();
   body.s_mm = entry_mm + body.half_extent_s_mm;
-  body.v_mps = state_.drives[index(DriveId::kTakt)].speed_mps;
+  body.v_mps = drives_.speed_mps(DriveId::kTakt);
   locate(body);
   infeed.layer_fillets -= body.member_count;
   infeed.layer_mm = infeed.layer_fillets * config.layer_mm_per_fillet;

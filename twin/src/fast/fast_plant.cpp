@@ -1,4 +1,5 @@
-// FastPlant: construction, reset, the step loop, the input image, bodies and exits.
+// FastPlant: construction, reset, the step loop, the input image, bodies and exits. The drives
+// and cameras are the shared emulators; this file hands them commands and ground truth.
 #include "fl/twin/fast_plant.hpp"
 
 #include <algorithm>
@@ -9,15 +10,28 @@
 namespace fl {
 namespace {
 
-// Decorrelates the subsystem streams of one seed (splitmix64 finaliser).
-std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t stream) {
-  std::uint64_t z = seed ^ (stream * 0xD1B54A32D192ED03ULL);
-  z = (z ^ (z >> 30U)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27U)) * 0x94D049BB133111EBULL;
-  return z ^ (z >> 31U);
+std::int64_t to_ns(double seconds) { return std::llround(seconds * 1e9); }
+
+std::int64_t internal_step_ns(const FastPlantConfig& config) {
+  return std::max<std::int64_t>(1, to_ns(config.internal_step_s));
 }
 
-std::int64_t to_ns(double seconds) { return std::llround(seconds * 1e9); }
+// The bodies as the cameras see them: downstream first, the first member's classes, a
+// touching pair as one blob.
+class BodyScene final : public CameraScene {
+ public:
+  explicit BodyScene(std::span<const FilletBody> bodies) : bodies_(bodies) {}
+  [[nodiscard]] std::size_t size() const override { return bodies_.size(); }
+  [[nodiscard]] double s_mm(std::size_t item) const override { return bodies_[item].s_mm; }
+  [[nodiscard]] CameraTruth truth(std::size_t item) const override {
+    const FilletBody& body = bodies_[item];
+    return {body.y_mm, body.angle_rad, body.members[0].hand, body.members[0].side,
+            body.member_count > 1};
+  }
+
+ private:
+  std::span<const FilletBody> bodies_;
+};
 
 }  // namespace
 
@@ -30,11 +44,13 @@ float fillet_thickness_mm(const FilletBody& body, float u_from_thick_end) {
 }
 
 FastPlant::FastPlant(const LineConfig& line, const FastPlantConfig& plant)
-    : line_(line), config_(plant) {
+    : line_(line),
+      config_(plant),
+      step_ns_(internal_step_ns(plant)),
+      drives_(line.limits, static_cast<double>(plant.belts.drive_delay_s)),
+      cameras_(line.cameras, plant.cameras, internal_step_ns(plant)) {
   if (!(config_.internal_step_s > 0.0F)) throw std::invalid_argument("internal_step_s must be > 0");
   if (config_.max_bodies == 0) throw std::invalid_argument("max_bodies must be > 0");
-  step_ns_ = std::max<std::int64_t>(1, to_ns(config_.internal_step_s));
-  drive_delay_ns_ = std::max<std::int64_t>(0, to_ns(config_.belts.drive_delay_s));
   bodies_.reserve(config_.max_bodies);
   exits_.resize(std::max<std::size_t>(config_.exit_capacity, 1));
   build_segments();
@@ -51,8 +67,7 @@ void FastPlant::reset(std::uint64_t seed, InputImage& in) {
   bodies_.clear();
   exit_count_ = 0;
   exits_drained_ = 0;
-  command_count_ = 0;
-  command_head_ = 0;
+  drives_.reset();
   pool_was_full_ = false;
   roller_went_down_ = false;
   last_plant_id_ = 0;
@@ -61,9 +76,6 @@ void FastPlant::reset(std::uint64_t seed, InputImage& in) {
   feed_rng_.seed_with(stream_seed(seed, 1));
   body_rng_.seed_with(stream_seed(seed, 2));
   sensor_rng_.seed_with(stream_seed(seed, 3));
-  for (std::size_t c = 0; c < kCameraCount; ++c) {
-    camera_rngs_[c].seed_with(stream_seed(seed, 16 + c));
-  }
 
   state_.infeed.hopper_fillets = config_.infeed.hopper_initial_fillets;
   state_.infeed.hopper_opening_mm =
@@ -73,12 +85,7 @@ void FastPlant::reset(std::uint64_t seed, InputImage& in) {
   draw_next_feed();
 
   std::memset(static_cast<void*>(&image_), 0, sizeof(image_));
-  for (std::size_t c = 0; c < kCameraCount; ++c) {
-    cameras_[c].sequence = 0;
-    cameras_[c].pending_count = 0;
-    cameras_[c].last_frame_time_ns = 0;
-    schedule_exposure(static_cast<CameraId>(c), true);
-  }
+  cameras_.reset(seed, state_.time_ns);
   write_image(in);
 }
 
@@ -91,10 +98,7 @@ void FastPlant::step(const OutputImage& out, std::int64_t dt_ns, InputImage& in)
     exits_drained_ = 0;
   }
 
-  command_head_ = (command_head_ + 1) % kCommandHistory;
-  commands_[command_head_].arrival_ns = state_.time_ns;
-  commands_[command_head_].out = out;
-  command_count_ = std::min(command_count_ + 1, kCommandHistory);
+  drives_.command(out.drives, state_.time_ns);
 
   std::int64_t remaining = dt_ns;
   while (remaining > 0) {
@@ -102,45 +106,28 @@ void FastPlant::step(const OutputImage& out, std::int64_t dt_ns, InputImage& in)
     substep(h_ns, out);
     remaining -= h_ns;
   }
-  publish_frames();
+  cameras_.publish(state_.time_ns, faults_.cameras, image_.cameras);
   write_image(in);
-}
-
-const OutputImage& FastPlant::delayed_command(std::int64_t at_ns) const {
-  for (std::size_t i = 0; i < command_count_; ++i) {
-    const std::size_t slot = (command_head_ + kCommandHistory - i) % kCommandHistory;
-    if (commands_[slot].arrival_ns + drive_delay_ns_ <= at_ns) return commands_[slot].out;
-  }
-  if (command_count_ == kCommandHistory) {
-    // A delay longer than the history: the oldest command kept is the best there is.
-    return commands_[(command_head_ + 1) % kCommandHistory].out;
-  }
-  return idle_command_;
 }
 
 void FastPlant::substep(std::int64_t h_ns, const OutputImage& out) {
   const double h_s = static_cast<double>(h_ns) * 1e-9;
-  step_drives(h_s, delayed_command(state_.time_ns));
+  // The safety chain cuts every drive (STO).
+  drives_.step(state_.time_ns, h_s, faults_.drive_fault, !faults_.estop_open);
   step_stations(h_s, out);
   step_infeed(h_s, out);
   step_bodies(h_s, out);
   resolve_contacts();
   sort_bodies();
   state_.time_ns += h_ns;
-  capture_frames();
+  cameras_.capture_due(state_.time_ns, BodyScene(bodies()), faults_.cameras);
 }
 
 void FastPlant::write_image(InputImage& in) {
   InputImage& image = image_;
   image.time_ns = state_.time_ns;
-  for (std::size_t d = 0; d < kDriveCount; ++d) {
-    const FastDriveState& drive = state_.drives[d];
-    image.drives[d].speed_mps = static_cast<float>(drive.speed_mps);
-    image.drives[d].encoder_counts = drive.encoder_counts;
-    image.drives[d].ready = drive.ready;
-    image.drives[d].fault = drive.fault;
-  }
-  // image.cameras is written by publish_frames().
+  drives_.write(image.drives);
+  // image.cameras is written by the camera emulator's publish().
   FastInfeedState& infeed = state_.infeed;
   infeed.level_reading_mm =
       std::max(0.0, infeed.layer_mm +

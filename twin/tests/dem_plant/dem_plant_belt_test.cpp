@@ -9,7 +9,7 @@ namespace {
 TEST(DemPlantBelt, FilletReachesBeltSpeedAndIsCarriedTheAnalyticDistance) {
   DemRig rig;
   rig.run(0.2);  // guide at 0.5 m/s: 5 ms delay + 0.1 s ramp at 5 m/s^2
-  ASSERT_DOUBLE_EQ(rig.plant->drive_speed_mps(DriveId::kGuide), 0.5);
+  ASSERT_DOUBLE_EQ(rig.plant->drives().speed_mps(DriveId::kGuide), 0.5);
   DemFilletSpawn spawn;
   spawn.s_mm = 1100.0;  // guide belt, between the rails (+-180 mm here)
   spawn.v_mps = 0.0;    // dropped at rest: friction must bring it up to speed
@@ -68,6 +68,41 @@ TEST(DemPlantBelt, LaserBarrierSeesTheFilletCrossing) {
   EXPECT_FALSE(rig.in.takt_beam_broken);
   EXPECT_EQ(rig.plant->fillets_fed(), 1U);
   EXPECT_EQ(rig.plant->fillets_on_line(), 1U);
+}
+
+}  // namespace
+}  // namespace fl::test
+
+namespace fl::test {
+namespace {
+
+// A reject-belt reversal drops into the crate only what the reversing belt carries back over
+// its upstream edge. The crate test used to take any fillet upstream of the reject belt that
+// moved backwards at all while the belt reversed (a fillet settling on the held guide, the
+// takt belt's row): in the closed loop 12 of 14 fed fillets vanished into the crate.
+TEST(DemPlantBelt, ReversalDropsOnlyTheFilletOnTheRejectBelt) {
+  DemRig rig;
+  rig.out = OutputImage{};  // the line holds while the reject belt reverses
+  rig.out.drives[index(DriveId::kReject)] = {true, -0.5F, 0.0F};
+  DemFilletSpawn on_reject;
+  on_reject.s_mm = 2300.0;  // rear about 12 mm past the belt's upstream edge at 2200
+  ASSERT_TRUE(rig.plant->spawn_fillet(on_reject));
+  rig.run(0.1);  // 5 ms delay and a 0.1 s ramp: the reject belt is reversing
+  ASSERT_LT(rig.plant->drives().speed_mps(DriveId::kReject), 0.0);
+  DemFilletSpawn upstream;
+  upstream.s_mm = 1700.0;  // on the held guide belt, 500 mm upstream of the reject belt
+  upstream.v_mps = -0.02;  // rocking back as the guide stopped
+  ASSERT_TRUE(rig.plant->spawn_fillet(upstream));
+  std::array<std::uint64_t, 4> exits{};
+  for (int i = 0; i < 100; ++i) {  // 1 s at -0.5 m/s: 500 mm of belt travel back
+    rig.step();
+    for (const TrueFilletExit& exit : rig.plant->drain_exits()) {
+      ++exits[static_cast<std::size_t>(exit.exit)];
+    }
+  }
+  EXPECT_EQ(exits[static_cast<std::size_t>(TrueExit::kRejectCrate)], 1U);
+  ASSERT_EQ(rig.plant->fillets().size(), 1U);
+  EXPECT_NEAR(rig.plant->fillets()[0].s_mm, 1700.0, 20.0);  // settled where it was put
 }
 
 }  // namespace

@@ -194,7 +194,7 @@ TEST(FastCameras, OnlyBodiesInTheFieldOfViewAndAtMostEightPerFrame) {
   rig.run(0.5, kStepNs);
   const CameraFrame& frame = rig.in.cameras[index(CameraId::kPosition)];
   EXPECT_EQ(frame.count, kMaxEstimatesPerFrame);
-  EXPECT_GT(rig.plant->counters().detections_truncated[index(CameraId::kPosition)], 0U);
+  EXPECT_GT(rig.plant->cameras().counters().detections_truncated[index(CameraId::kPosition)], 0U);
   for (std::size_t i = 0; i < frame.count; ++i) {
     EXPECT_LE(std::abs(frame.estimates[i].x_mm), 0.5F * mount.field_of_view_mm + 10.0F);
   }
@@ -268,7 +268,7 @@ TEST(FastCameraFaults, DroppedFramesAndStaleCameraStopTheSequence) {
   stale.faults().stale = true;
   EXPECT_EQ(stale.each_new_frame(1.0, [](const CameraFrame&) {}), 0);
   EXPECT_EQ(stale.frame().frame_time_ns, before.frame_time_ns);
-  EXPECT_GT(stale.rig.plant->counters().frames_dropped[index(CameraId::kPosition)], 20U);
+  EXPECT_GT(stale.rig.plant->cameras().counters().frames_dropped[index(CameraId::kPosition)], 20U);
 }
 
 TEST(FastCameraFaults, NanFieldsDuplicatesPhantomsAndOutOfOrderTimes) {

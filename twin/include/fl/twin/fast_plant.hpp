@@ -1,8 +1,10 @@
 // The fast plant: a seeded 2D rigid-pose model of the whole line of thesis section 5.3
 // (mailbox hopper, bulk belt, leveller, takt conveyor, speed transitions, guide rails, flip
 // plates, reject belt, centring, two multilane units, squeeze roller, final air knife) with
-// its drives, sensors and cameras. It integrates at a fixed internal step (1 ms) and runs a
-// minute of line time in a fraction of a second, for closed-loop tests and lock-step runs.
+// its sensors. It integrates at a fixed internal step (2 ms) and runs a minute of line time in
+// a fraction of a second, for closed-loop tests and lock-step runs. The drives and cameras are
+// the emulators both plants share (fl/twin/sensors): this plant moves the bodies and hands
+// them their ground truth.
 //
 // Coordinates are the line's (line_config.hpp): s_mm along the product path, 0 at the takt
 // barrier; y_mm lateral, positive to the left looking downstream; angle_rad the direction from
@@ -10,7 +12,7 @@
 // (-pi, pi] (the convention of FilletEstimate).
 //
 // Determinism: one seed gives a bit-identical sequence of input images. All randomness comes
-// from FastRng (xoshiro256**, portable uniform and polar-method normal draws), in separate
+// from TwinRng (xoshiro256**, portable uniform and polar-method normal draws), in separate
 // streams per subsystem so that e.g. a camera fault does not change the fillets fed. step()
 // does not allocate: bodies and exits live in pools sized at construction.
 #pragma once
@@ -27,78 +29,14 @@
 #include "fl/controller/plant.hpp"
 #include "fl/controller/process_image.hpp"
 #include "fl/twin/fast_plant_config.hpp"
+#include "fl/twin/sensors/camera_emulator.hpp"
+#include "fl/twin/sensors/drive_emulator.hpp"
+#include "fl/twin/sensors/twin_rng.hpp"
 
 namespace fl {
 
-// ---------------------------------------------------------------- random numbers
-
-// xoshiro256** seeded through splitmix64, with distributions written out here because the
-// standard library's distributions are implementation-defined.
-class FastRng {
- public:
-  FastRng() { seed_with(0); }
-  explicit FastRng(std::uint64_t seed) { seed_with(seed); }
-
-  void seed_with(std::uint64_t seed) {
-    for (auto& word : state_) {
-      seed += 0x9E3779B97F4A7C15ULL;
-      std::uint64_t z = seed;
-      z = (z ^ (z >> 30U)) * 0xBF58476D1CE4E5B9ULL;
-      z = (z ^ (z >> 27U)) * 0x94D049BB133111EBULL;
-      word = z ^ (z >> 31U);
-    }
-    has_spare_ = false;
-    spare_ = 0.0;
-  }
-
-  std::uint64_t next_u64() {
-    const std::uint64_t result = rotl(state_[1] * 5U, 7) * 9U;
-    const std::uint64_t t = state_[1] << 17U;
-    state_[2] ^= state_[0];
-    state_[3] ^= state_[1];
-    state_[1] ^= state_[2];
-    state_[0] ^= state_[3];
-    state_[2] ^= t;
-    state_[3] = rotl(state_[3], 45);
-    return result;
-  }
-
-  // [0, 1) with 53 random bits.
-  double uniform() { return static_cast<double>(next_u64() >> 11U) * 0x1.0p-53; }
-  double uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
-  bool bernoulli(double p) { return uniform() < p; }
-  // 0 .. n-1 (multiply-shift; the bias for small n is below 2^-32).
-  std::uint32_t below(std::uint32_t n) {
-    return static_cast<std::uint32_t>(((next_u64() >> 32U) * n) >> 32U);
-  }
-  // Standard normal, Marsaglia's polar method.
-  double normal() {
-    if (has_spare_) {
-      has_spare_ = false;
-      return spare_;
-    }
-    double u = 0.0;
-    double v = 0.0;
-    double s = 0.0;
-    do {
-      u = uniform(-1.0, 1.0);
-      v = uniform(-1.0, 1.0);
-      s = u * u + v * v;
-    } while (s >= 1.0 || s == 0.0);
-    const double factor = std::sqrt(-2.0 * std::log(s) / s);
-    spare_ = v * factor;
-    has_spare_ = true;
-    return u * factor;
-  }
-
- private:
-  static std::uint64_t rotl(std::uint64_t x, int k) {
-    return (x << static_cast<unsigned>(k)) | (x >> static_cast<unsigned>(64 - k));
-  }
-  std::array<std::uint64_t, 4> state_{};
-  double spare_ = 0.0;
-  bool has_spare_ = false;
-};
+// The plants' generator; the name stays for the fast plant's tests and tools.
+using FastRng = TwinRng;
 
 // ---------------------------------------------------------------- bodies
 
@@ -167,15 +105,6 @@ struct FilletBody {
   bool squeezed_ok = false;
 };
 
-// Angle into (-pi, pi] (std::remainder is exact, so this is portable).
-inline double wrap_angle_rad(double angle_rad) {
-  // In range already: remainder() would return it unchanged, so skip the library call.
-  if (angle_rad > -std::numbers::pi && angle_rad <= std::numbers::pi) return angle_rad;
-  double wrapped = std::remainder(angle_rad, 2.0 * std::numbers::pi);
-  if (wrapped <= -std::numbers::pi) wrapped += 2.0 * std::numbers::pi;
-  return wrapped;
-}
-
 // Sets a body's heading (wrapped) and its cached trigonometry and extents.
 inline void set_body_angle(FilletBody& body, double angle_rad) {
   body.angle_rad = wrap_angle_rad(angle_rad);
@@ -211,33 +140,19 @@ struct BodySpawn {
 
 // ---------------------------------------------------------------- faults
 
-struct FastCameraFaults {
-  float drop_frame_prob = 0.0F;    // a captured frame is never delivered
-  float nan_prob = 0.0F;           // per frame: one field of one estimate is NaN
-  float duplicate_prob = 0.0F;     // per frame: one detection is reported twice
-  float out_of_order_prob = 0.0F;  // per frame: exposure time before the previous frame's
-  float phantom_prob = 0.0F;       // per frame: a detection where there is no item
-  bool stale = false;              // stops delivering: the input keeps its last frame
-};
+// The camera faults are the shared emulator's; the name stays for the closed-loop scenarios.
+using FastCameraFaults = CameraFaults;
 
 // Settable at run time through FastPlant::faults(); reset() clears it.
 struct FastPlantFaults {
   std::array<bool, kDriveCount> drive_fault{};  // drive trips: not ready, fault, stops
-  std::array<FastCameraFaults, kCameraCount> cameras{};
+  CameraFaultSet cameras{};
   bool estop_open = false;         // safety chain open: drives and leveller stop
   bool leveller_overload = false;  // overload switch forced on (the rotor stops)
   bool hopper_blocked = false;     // mailbox outflow stuck regardless of the opening
 };
 
 // ---------------------------------------------------------------- state
-
-struct FastDriveState {
-  double speed_mps = 0.0;
-  double position_mm = 0.0;  // integrated belt travel, the encoder's source
-  std::int64_t encoder_counts = 0;
-  bool ready = false;
-  bool fault = false;
-};
 
 struct FastInfeedState {
   std::uint32_t hopper_fillets = 0;  // left in the mailbox hopper
@@ -271,17 +186,11 @@ struct FastPlantCounters {
   std::uint64_t pool_full_refusals = 0;  // leveller wanted to feed but the pool was full
   std::uint64_t hopper_blockages = 0;
   std::uint64_t misflips = 0;
-  std::uint64_t roller_stuck = 0;
-  std::array<std::uint64_t, kCameraCount> frames_captured{};
-  std::array<std::uint64_t, kCameraCount> frames_published{};
-  std::array<std::uint64_t, kCameraCount> frames_dropped{};        // drop fault or stale camera
-  std::array<std::uint64_t, kCameraCount> frames_superseded{};     // two ready in one step
-  std::array<std::uint64_t, kCameraCount> detections_truncated{};  // beyond 8 per frame
+  std::uint64_t roller_stuck = 0;  // frame counters: cameras().counters()
 };
 
 struct FastPlantState {
-  std::int64_t time_ns = 0;
-  std::array<FastDriveState, kDriveCount> drives{};
+  std::int64_t time_ns = 0;  // belt drives: FastPlant::drives()
   FastInfeedState infeed;
   FastStationState stations;
 };
@@ -308,6 +217,8 @@ class FastPlant final : public Plant {
   // first; the span is valid until the next step(), reset() or spawn_body().
   [[nodiscard]] std::span<const FilletBody> bodies() const;
   [[nodiscard]] const FastPlantState& state() const { return state_; }
+  [[nodiscard]] const DriveEmulator& drives() const { return drives_; }
+  [[nodiscard]] const CameraEmulator& cameras() const { return cameras_; }
   [[nodiscard]] const FastPlantCounters& counters() const { return counters_; }
   [[nodiscard]] const LineConfig& line_config() const { return line_; }
   [[nodiscard]] const FastPlantConfig& plant_config() const { return config_; }
@@ -317,28 +228,6 @@ class FastPlant final : public Plant {
   std::optional<std::uint32_t> spawn_body(const BodySpawn& spawn);
 
  private:
-  struct PendingFrame {
-    CameraFrame frame;
-    std::int64_t publish_ns = 0;
-    bool out_of_order = false;  // fault: stamped before the previous frame when published
-  };
-  static constexpr std::size_t kPendingFrames = 16;
-  static constexpr std::size_t kCommandHistory = 16;
-
-  struct CameraState {
-    std::int64_t next_nominal_ns = 0;
-    std::int64_t next_exposure_ns = 0;
-    std::uint32_t sequence = 0;
-    std::int64_t last_frame_time_ns = 0;
-    std::array<PendingFrame, kPendingFrames> pending{};
-    std::size_t pending_count = 0;
-  };
-
-  struct TimedCommand {
-    std::int64_t arrival_ns = 0;
-    OutputImage out{};
-  };
-
   // A product-path segment: a belt section (or the flip plates) with what acts there.
   struct Segment {
     double start_mm = 0.0;
@@ -357,7 +246,6 @@ class FastPlant final : public Plant {
 
   // fast_plant.cpp
   void substep(std::int64_t h_ns, const OutputImage& out);
-  const OutputImage& delayed_command(std::int64_t at_ns) const;
   void write_image(InputImage& in);
   void record_exit(const FilletBody& body, TrueExit exit);
   void insert_body(const FilletBody& body);
@@ -366,7 +254,6 @@ class FastPlant final : public Plant {
   std::uint32_t next_group_id() { return ++last_group_id_; }
 
   // fast_actuators.cpp
-  void step_drives(double h_s, const OutputImage& delayed);
   void step_stations(double h_s, const OutputImage& out);
 
   // fast_infeed.cpp
@@ -382,21 +269,15 @@ class FastPlant final : public Plant {
   void sort_bodies();
   [[nodiscard]] bool beam_broken() const;
 
-  // fast_cameras.cpp
-  void schedule_exposure(CameraId camera, bool first);
-  void capture_frames();
-  void capture(CameraId camera);
-  void publish_frames();
-  static void copy_pending(PendingFrame& to, const PendingFrame& from);
-
   LineConfig line_;
   FastPlantConfig config_;
   FastPlantFaults faults_{};
   FastPlantState state_{};
   FastPlantCounters counters_{};
 
-  std::int64_t step_ns_ = 1000000;
-  std::int64_t drive_delay_ns_ = 5000000;
+  std::int64_t step_ns_ = 2000000;
+  DriveEmulator drives_;
+  CameraEmulator cameras_;
   bool roller_went_down_ = false;   // the roller reached the fillets in this sub-step
   std::vector<FilletBody> bodies_;  // capacity max_bodies, downstream first
   std::vector<TrueFilletExit> exits_;
@@ -406,19 +287,12 @@ class FastPlant final : public Plant {
   std::array<Segment, kDriveCount + 1> segments_{};
   std::size_t segment_count_ = 0;
 
-  std::array<CameraState, kCameraCount> cameras_{};
-  std::array<TimedCommand, kCommandHistory> commands_{};
-  std::size_t command_head_ = 0;  // newest entry
-  std::size_t command_count_ = 0;
-  OutputImage idle_command_{};
-
   NextFeed next_feed_{};
   bool pool_was_full_ = false;
 
   FastRng feed_rng_;
   FastRng body_rng_;
-  FastRng sensor_rng_;
-  std::array<FastRng, kCameraCount> camera_rngs_{};
+  FastRng sensor_rng_;  // level sensor
 
   std::uint32_t last_plant_id_ = 0;
   std::uint32_t last_group_id_ = 0;

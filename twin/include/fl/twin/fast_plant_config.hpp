@@ -10,6 +10,7 @@
 #include <filesystem>
 
 #include "fl/controller/process_image.hpp"
+#include "fl/twin/sensors/camera_emulator.hpp"
 
 namespace fl {
 
@@ -156,24 +157,8 @@ struct FastFinalRejectConfig {
   bool operator==(const FastFinalRejectConfig&) const = default;
 };
 
-struct FastCameraConfig {
-  float latency_s = 0.02F;   // exposure to delivery into the input image
-  float jitter_s = 0.0005F;  // exposure time jitter (sigma), clipped to a quarter period
-  float position_sigma_mm = 2.0F;
-  float angle_sigma_rad = 0.02F;
-  bool classifies = false;  // reports hand and side; otherwise both are kUnknown
-  float hand_flip_prob = 0.0F;
-  float side_flip_prob = 0.0F;
-  float singulation_error_prob = 0.01F;  // singulated flag reported wrong
-  float miss_prob = 0.005F;              // an item in view missing from one frame
-  // Confidence drawn uniformly: correct classifications high, misclassified or touching
-  // items lower (so that a confidence threshold catches part of them).
-  float confidence_ok_min = 0.75F;
-  float confidence_ok_max = 0.99F;
-  float confidence_bad_min = 0.35F;
-  float confidence_bad_max = 0.8F;
-  bool operator==(const FastCameraConfig&) const = default;
-};
+// The cameras' measurement model is the shared emulator's (fl/twin/sensors).
+using FastCameraConfig = CameraModelConfig;
 
 // Per-camera defaults (indexed by CameraId).
 constexpr std::array<FastCameraConfig, kCameraCount> default_fast_camera_configs() {

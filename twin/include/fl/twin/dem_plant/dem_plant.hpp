@@ -7,8 +7,8 @@
 //
 // - Belts: one rectangle (two triangles) per product-path belt with the drive's actual speed
 //   as surface velocity; multilane units two side-by-side belts (left y > 0, right y < 0);
-//   small gaps between belts (see DemMachineryConfig). Drives ramp within their limits after
-//   the fast plant's 5 ms command delay and count encoder ticks as the fast plant's.
+//   small gaps between belts (see DemMachineryConfig). The drives are the shared
+//   DriveEmulator (fl/twin/sensors): 5 ms command delay, ramps, encoders, as the fast plant.
 // - Side walls along the whole line, guide rails funnelling over the guide belt.
 // - Flip plates: conveying surfaces at the guide belt's speed. Simplification: a retracted
 //   plate flips a fillet as an instantaneous rigid rotation of its spheres by 180 degrees
@@ -24,9 +24,10 @@
 //   backlog counted in fillets (the level sensor reads it as heap height), and the running
 //   leveller places the next fillet (or touching pair) on the takt belt's upstream end when
 //   there is room, as the fast plant's levelled layer.
-// - Cameras: the fast plant's camera model (period, jitter, latency, noise, misses,
-//   misclassification, faults) on each fillet's ground-truth rigid pose (a least-squares fit
-//   of its spheres to its template).
+// - Cameras: the shared CameraEmulator (fl/twin/sensors: period, jitter, latency, noise,
+//   misses, misclassification, faults), the same as the fast plant's, on each fillet's
+//   ground-truth rigid pose (a least-squares fit of its spheres to its template); a fillet
+//   whose spheres touch another fillet's is one blob (not singulated).
 //
 // Determinism: one seed and one thread count give bit-identical input images.
 #pragma once
@@ -43,7 +44,10 @@
 #include "fl/twin/dem/fillet_template.hpp"
 #include "fl/twin/dem/simulation.hpp"
 #include "fl/twin/dem_plant/dem_plant_config.hpp"
-#include "fl/twin/fast_plant.hpp"
+#include "fl/twin/fast_plant_config.hpp"
+#include "fl/twin/sensors/camera_emulator.hpp"
+#include "fl/twin/sensors/drive_emulator.hpp"
+#include "fl/twin/sensors/twin_rng.hpp"
 
 namespace fl {
 
@@ -78,7 +82,7 @@ struct DemFilletView {
 
 struct DemPlantFaults {
   std::array<bool, kDriveCount> drive_fault{};
-  std::array<FastCameraFaults, kCameraCount> cameras{};
+  CameraFaultSet cameras{};
   bool estop_open = false;
 };
 
@@ -90,13 +94,8 @@ struct DemPlantCounters {
   std::uint64_t unfed_losses = 0;
   std::uint64_t flips = 0;
   std::uint64_t misflips = 0;
-  std::uint64_t rebuilds = 0;  // engine rebuilt to take fillets out
-  std::uint64_t engine_steps = 0;
-  std::array<std::uint64_t, kCameraCount> frames_captured{};
-  std::array<std::uint64_t, kCameraCount> frames_published{};
-  std::array<std::uint64_t, kCameraCount> frames_dropped{};
-  std::array<std::uint64_t, kCameraCount> frames_superseded{};
-  std::array<std::uint64_t, kCameraCount> detections_truncated{};
+  std::uint64_t rebuilds = 0;      // engine rebuilt to take fillets out
+  std::uint64_t engine_steps = 0;  // frame counters: cameras().counters()
 };
 
 class DemPlant final : public Plant {
@@ -118,9 +117,8 @@ class DemPlant final : public Plant {
   [[nodiscard]] std::vector<DemFilletView> fillets() const;
   [[nodiscard]] const dem::Simulation& simulation() const { return *sim_; }
   [[nodiscard]] const DemPlantCounters& counters() const { return counters_; }
-  [[nodiscard]] double drive_speed_mps(DriveId drive) const {
-    return drives_[index(drive)].speed_mps;
-  }
+  [[nodiscard]] const DriveEmulator& drives() const { return drives_; }
+  [[nodiscard]] const CameraEmulator& cameras() const { return cameras_; }
   [[nodiscard]] std::int64_t time_ns() const { return time_ns_; }
   [[nodiscard]] const std::vector<dem::FilletTemplate>& templates() const { return templates_; }
   [[nodiscard]] double engine_timestep_s() const;
@@ -152,13 +150,6 @@ class DemPlant final : public Plant {
     SideUp side = SideUp::kUnknown;
     Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
   };
-  struct DriveState {
-    double speed_mps = 0.0;
-    double position_mm = 0.0;
-    std::int64_t encoder_counts = 0;
-    bool ready = false;
-    bool fault = false;
-  };
   struct Stations {
     double plate1_travel = 0.0;
     double plate2_travel = 0.0;
@@ -184,42 +175,22 @@ class DemPlant final : public Plant {
     double angle_rad = 0.0;
     double gap_mm = 0.0;
   };
-  struct PendingFrame {
-    CameraFrame frame;
-    std::int64_t publish_ns = 0;
-    bool out_of_order = false;
-  };
-  static constexpr std::size_t kPendingFrames = 16;
-  struct CameraState {
-    std::int64_t next_nominal_ns = 0;
-    std::int64_t next_exposure_ns = 0;
-    std::uint32_t sequence = 0;
-    std::int64_t last_frame_time_ns = 0;
-    std::array<PendingFrame, kPendingFrames> pending{};
-    std::size_t pending_count = 0;
-  };
-  static constexpr std::size_t kCommandHistory = 16;
-  struct TimedCommand {
-    std::int64_t arrival_ns = 0;
-    OutputImage out{};
-  };
-
   // dem_plant.cpp
   void control_step(std::int64_t h_ns, const OutputImage& out);
-  const OutputImage& delayed_command(std::int64_t at_ns) const;
   void write_image(InputImage& in);
   void record_exit(const Fillet& fillet, TrueExit exit);
   void take_out_removed();
   void scan_particles();
   [[nodiscard]] Pose fit_pose(const Fillet& fillet) const;
   [[nodiscard]] bool touching(std::size_t f) const;
+  [[nodiscard]] Hand hand_of(const Fillet& fillet) const;
+  class FilletScene;  // the fillets as the camera emulator sees them
   [[nodiscard]] bool beam_broken() const;
   std::uint32_t add_fillet(std::uint8_t variant, SideUp side, const Eigen::Vector3d& centroid_m,
                            double angle_rad, double v_mps, std::uint32_t group_id);
   std::shared_ptr<const dem::Model> build_model() const;
 
   // dem_machinery.cpp
-  void step_drives(double h_s, const OutputImage& delayed);
   void step_stations(double h_s, const OutputImage& out);
   void command_walls(double h_s);
   void apply_events(const OutputImage& out);
@@ -229,12 +200,6 @@ class DemPlant final : public Plant {
   // dem_feeder.cpp
   void step_infeed(double h_s, const OutputImage& out);
   void draw_next_feed();
-
-  // dem_cameras.cpp
-  void schedule_exposure(CameraId camera, bool first);
-  void capture_frames();
-  void capture(CameraId camera);
-  void publish_frames();
 
   LineConfig line_;
   DemPlantConfig config_;
@@ -250,8 +215,8 @@ class DemPlant final : public Plant {
   DemPlantCounters counters_{};
   std::int64_t time_ns_ = 0;
   std::int64_t step_ns_ = 1000000;
-  std::int64_t drive_delay_ns_ = 5000000;
-  std::array<DriveState, kDriveCount> drives_{};
+  DriveEmulator drives_;
+  CameraEmulator cameras_;
   Stations stations_{};
   Infeed infeed_{};
   NextFeed next_feed_{};
@@ -260,17 +225,11 @@ class DemPlant final : public Plant {
   std::vector<TrueFilletExit> exits_;
   std::size_t exit_count_ = 0;
   std::size_t exits_drained_ = 0;
-  std::array<CameraState, kCameraCount> cameras_{};
-  std::array<TimedCommand, kCommandHistory> commands_{};
-  std::size_t command_head_ = 0;
-  std::size_t command_count_ = 0;
-  OutputImage idle_command_{};
   bool beam_ = false;
 
-  FastRng feed_rng_;
-  FastRng body_rng_;
-  FastRng sensor_rng_;
-  std::array<FastRng, kCameraCount> camera_rngs_{};
+  TwinRng feed_rng_;
+  TwinRng body_rng_;
+  TwinRng sensor_rng_;  // level sensor
   std::uint32_t last_plant_id_ = 0;
   std::uint32_t last_group_id_ = 0;
   InputImage image_{};

@@ -1,15 +1,10 @@
-// Cameras of the DEM plant: the fast plant's camera model (fast_cameras.cpp: exposure at the
-// mount's period with jitter, noise, misses, misclassification, confidences, faults, delivery
-// after the latency) applied to each fillet's ground-truth rigid pose. The logic is the fast
-// plant's, copied because it is private to FastPlant; the detections differ: one estimate per
-// fillet, not singulated while any of its spheres touches another fillet's.
+// Cameras: exposure scheduling, detections with noise and misclassification, delivery after
+// the latency, and the injectable faults.
+#include "fl/twin/sensors/camera_emulator.hpp"
+
 #include <algorithm>
-#include <cmath>
 #include <cstring>
 #include <limits>
-#include <numbers>
-
-#include "fl/twin/dem_plant/dem_plant.hpp"
 
 namespace fl {
 namespace {
@@ -28,6 +23,7 @@ SideUp other_side(SideUp side) {
   return side;
 }
 
+// Byte copy, padding included: frames end up in the image, which is compared byte for byte.
 template <typename T>
 void copy_bytes(T& to, const T& from) {
   std::memcpy(static_cast<void*>(&to), static_cast<const void*>(&from), sizeof(T));
@@ -35,39 +31,61 @@ void copy_bytes(T& to, const T& from) {
 
 }  // namespace
 
-void DemPlant::schedule_exposure(CameraId camera, bool first) {
-  CameraState& state = cameras_[index(camera)];
-  FastRng& rng = camera_rngs_[index(camera)];
-  const std::int64_t period_ns = std::max(step_ns_, to_ns(line_.cameras[index(camera)].period_s));
+CameraEmulator::CameraEmulator(const std::array<CameraMount, kCameraCount>& mounts,
+                               const std::array<CameraModelConfig, kCameraCount>& models,
+                               std::int64_t step_ns)
+    : mounts_(mounts), models_(models), step_ns_(std::max<std::int64_t>(1, step_ns)) {
+  reset(0, 0);
+}
+
+void CameraEmulator::reset(std::uint64_t seed, std::int64_t time_ns) {
+  counters_ = CameraCounters{};
+  for (std::size_t c = 0; c < kCameraCount; ++c) {
+    rngs_[c].seed_with(stream_seed(seed, kCameraStreamBase + c));
+    CameraState& state = cameras_[c];
+    state.sequence = 0;
+    state.pending_count = 0;
+    state.last_frame_time_ns = 0;
+    schedule_exposure(c, time_ns, true);
+  }
+}
+
+void CameraEmulator::schedule_exposure(std::size_t c, std::int64_t time_ns, bool first) {
+  CameraState& state = cameras_[c];
+  TwinRng& rng = rngs_[c];
+  const std::int64_t period_ns = std::max(step_ns_, to_ns(mounts_[c].period_s));
   if (first) {
+    // Free-running cameras: a random phase each, not synchronised with each other.
     state.next_nominal_ns =
-        time_ns_ + static_cast<std::int64_t>(rng.uniform() * static_cast<double>(period_ns));
+        time_ns + static_cast<std::int64_t>(rng.uniform() * static_cast<double>(period_ns));
   } else {
     state.next_nominal_ns += period_ns;
   }
   const double quarter_s = 0.25 * static_cast<double>(period_ns) * 1e-9;
   const double jitter_s =
-      std::clamp(static_cast<double>(config_.shared.cameras[index(camera)].jitter_s) * rng.normal(),
-                 -quarter_s, quarter_s);
+      std::clamp(static_cast<double>(models_[c].jitter_s) * rng.normal(), -quarter_s, quarter_s);
   state.next_exposure_ns = state.next_nominal_ns + to_ns(jitter_s);
 }
 
-void DemPlant::capture_frames() {
+void CameraEmulator::capture_due(std::int64_t time_ns, const CameraScene& scene,
+                                 const CameraFaultSet& faults) {
   for (std::size_t c = 0; c < kCameraCount; ++c) {
-    if (time_ns_ < cameras_[c].next_exposure_ns) continue;
-    capture(static_cast<CameraId>(c));
-    schedule_exposure(static_cast<CameraId>(c), false);
+    if (time_ns < cameras_[c].next_exposure_ns) continue;
+    capture(c, time_ns, scene, faults[c]);
+    schedule_exposure(c, time_ns, false);
   }
 }
 
-void DemPlant::capture(CameraId camera) {
-  const std::size_t c = index(camera);
+void CameraEmulator::capture(std::size_t c, std::int64_t time_ns, const CameraScene& scene,
+                             const CameraFaults& faults) {
   CameraState& state = cameras_[c];
-  FastRng& rng = camera_rngs_[c];
-  const FastCameraConfig& config = config_.shared.cameras[c];
-  const FastCameraFaults& faults = faults_.cameras[c];
-  const CameraMount& mount = line_.cameras[c];
+  TwinRng& rng = rngs_[c];
+  const CameraModelConfig& config = models_[c];
+  const CameraMount& mount = mounts_[c];
   ++counters_.frames_captured[c];
+
+  // Fault draws happen for every frame, so that switching a fault on changes its outcomes
+  // but not the rest of the camera's random sequence.
   const double drop_draw = rng.uniform();
   const double duplicate_draw = rng.uniform();
   const double phantom_draw = rng.uniform();
@@ -77,7 +95,9 @@ void DemPlant::capture(CameraId camera) {
     ++counters_.frames_dropped[c];
     return;
   }
+
   if (state.pending_count == kPendingFrames) {
+    // Never with sane latencies: the oldest undelivered frame gives way.
     for (std::size_t k = 1; k < kPendingFrames; ++k) {
       copy_bytes(state.pending[k - 1], state.pending[k]);
     }
@@ -87,39 +107,36 @@ void DemPlant::capture(CameraId camera) {
   PendingFrame& pending = state.pending[state.pending_count++];
   std::memset(static_cast<void*>(&pending.frame), 0, sizeof(CameraFrame));
   CameraFrame& frame = pending.frame;
-  frame.frame_time_ns = time_ns_;
-  pending.publish_ns = time_ns_ + to_ns(config.latency_s);
+  frame.frame_time_ns = time_ns;
+  pending.publish_ns = time_ns + to_ns(config.latency_s);
   pending.out_of_order = order_draw < faults.out_of_order_prob;
 
   const double half_view_mm = 0.5 * static_cast<double>(mount.field_of_view_mm);
   std::uint8_t count = 0;
-  for (std::size_t f = 0; f < fillets_.size(); ++f) {
-    const Fillet& fillet = fillets_[f];
-    if (fillet.particles.empty()) continue;
-    const double x_mm = fillet.centroid_m.x() * 1000.0 - mount.s_mm;
+  for (std::size_t item = 0; item < scene.size(); ++item) {
+    const double x_mm = scene.s_mm(item) - mount.s_mm;
     if (std::abs(x_mm) > half_view_mm) continue;
     if (rng.bernoulli(config.miss_prob)) continue;
     if (count == kMaxEstimatesPerFrame) {
       ++counters_.detections_truncated[c];
       continue;
     }
-    const Pose pose = fit_pose(fillet);
+    const CameraTruth truth = scene.truth(item);
     FilletEstimate& estimate = frame.estimates[count++];
     estimate.x_mm = static_cast<float>(x_mm + config.position_sigma_mm * rng.normal());
-    estimate.y_mm = static_cast<float>(fillet.centroid_m.y() * 1000.0 +
-                                       config.position_sigma_mm * rng.normal());
+    estimate.y_mm = static_cast<float>(truth.y_mm + config.position_sigma_mm * rng.normal());
     estimate.angle_rad =
-        static_cast<float>(wrap_angle_rad(pose.angle_rad + config.angle_sigma_rad * rng.normal()));
+        static_cast<float>(wrap_angle_rad(truth.angle_rad + config.angle_sigma_rad * rng.normal()));
+    // A float rounding of pi must stay inside (-pi, pi].
     if (estimate.angle_rad <= -std::numbers::pi_v<float>) {
       estimate.angle_rad = std::numbers::pi_v<float>;
     }
-    const bool is_touching = touching(f);
-    estimate.singulated = rng.bernoulli(config.singulation_error_prob) ? is_touching : !is_touching;
-    bool doubtful = is_touching;
+    estimate.singulated =
+        rng.bernoulli(config.singulation_error_prob) ? truth.touching : !truth.touching;
+    bool doubtful = truth.touching;  // a blob of two is classified with less confidence
     if (config.classifies) {
-      estimate.hand =
-          templates_[fillet.variant].name.ends_with("_left") ? Hand::kLeft : Hand::kRight;
-      estimate.side = pose.side;
+      estimate.hand = truth.hand;
+      estimate.side = truth.side;
       if (rng.bernoulli(config.hand_flip_prob)) {
         estimate.hand = other_hand(estimate.hand);
         doubtful = true;
@@ -137,6 +154,8 @@ void DemPlant::capture(CameraId camera) {
             ? rng.uniform(config.confidence_bad_min, static_cast<double>(config.confidence_bad_max))
             : rng.uniform(config.confidence_ok_min, static_cast<double>(config.confidence_ok_max)));
   }
+
+  // Faults inside the frame.
   if (duplicate_draw < faults.duplicate_prob && count > 0 && count < kMaxEstimatesPerFrame) {
     FilletEstimate copy = frame.estimates[rng.below(count)];
     copy.x_mm += static_cast<float>(rng.normal());
@@ -176,25 +195,27 @@ void DemPlant::capture(CameraId camera) {
   frame.count = count;
 }
 
-void DemPlant::publish_frames() {
+void CameraEmulator::publish(std::int64_t time_ns, const CameraFaultSet& faults,
+                             std::array<CameraFrame, kCameraCount>& frames) {
   for (std::size_t c = 0; c < kCameraCount; ++c) {
     CameraState& state = cameras_[c];
     std::size_t ready = 0;
-    while (ready < state.pending_count && state.pending[ready].publish_ns <= time_ns_) ++ready;
+    while (ready < state.pending_count && state.pending[ready].publish_ns <= time_ns) ++ready;
     if (ready == 0) continue;
+    // Only the newest frame reaches the image; an older one ready in the same step is lost.
     counters_.frames_superseded[c] += ready - 1;
     PendingFrame& newest = state.pending[ready - 1];
-    if (faults_.cameras[c].stale) {
+    if (faults[c].stale) {
       counters_.frames_dropped[c] += 1;
     } else {
       CameraFrame& frame = newest.frame;
       if (newest.out_of_order && state.sequence > 0) {
-        const std::int64_t period_ns = to_ns(line_.cameras[c].period_s);
+        const std::int64_t period_ns = to_ns(mounts_[c].period_s);
         frame.frame_time_ns = state.last_frame_time_ns - std::max<std::int64_t>(period_ns, 1);
       }
       frame.sequence = ++state.sequence;
       state.last_frame_time_ns = frame.frame_time_ns;
-      copy_bytes(image_.cameras[c], frame);
+      copy_bytes(frames[c], frame);
       ++counters_.frames_published[c];
     }
     for (std::size_t k = ready; k < state.pending_count; ++k) {
