@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <tuple>
+#include <utility>
 
 #include "fl/twin/dem/state.hpp"
 
@@ -38,7 +40,9 @@ class HertzMindlin final : public ContactLaw {
       : youngs_pa_(material.effective_youngs_modulus_pa),
         shear_pa_(material.effective_shear_modulus_pa),
         damping_factor_(2.0 * kSqrtFiveSixths *
-                        restitution_damping_factor(parameters.at("restitution"))) {}
+                        restitution_damping_factor(parameters.at("restitution"))),
+        // sqrt(S_t m*) = sqrt(S_t / S_n) sqrt(S_n m*) and S_t / S_n = 4 G* / E*: one sqrt less
+        tangential_to_normal_damping_(std::sqrt(4.0 * shear_pa_ / youngs_pa_)) {}
 
   void compute(const PairGeometry& g, PairState& state, ForceAccumulator& f) const override {
     if (g.overlap_m <= 0.0) {
@@ -49,8 +53,9 @@ class HertzMindlin final : public ContactLaw {
     const double normal_stiffness = 2.0 * youngs_pa_ * sqrt_radius_overlap;  // S_n
     const double elastic_normal = (2.0 / 3.0) * normal_stiffness * g.overlap_m;
     const double normal_velocity = g.relative_velocity_m_per_s.dot(g.normal);
-    const double damping_normal =
-        -damping_factor_ * std::sqrt(normal_stiffness * g.effective_mass_kg) * normal_velocity;
+    const double normal_damping_coefficient =
+        damping_factor_ * std::sqrt(normal_stiffness * g.effective_mass_kg);
+    const double damping_normal = -normal_damping_coefficient * normal_velocity;
 
     const Vec3 tangential_velocity = g.relative_velocity_m_per_s - normal_velocity * g.normal;
     Vec3& xi = state.tangential_displacement_m;
@@ -62,9 +67,8 @@ class HertzMindlin final : public ContactLaw {
     f.normal_damping_force_n += damping_normal;
     f.friction_normal_load_n += elastic_normal + damping_normal;
     f.tangential_elastic_force_n -= tangential_stiffness * xi;
-    f.tangential_damping_force_n -= damping_factor_ *
-                                    std::sqrt(tangential_stiffness * g.effective_mass_kg) *
-                                    tangential_velocity;
+    f.tangential_damping_force_n -=
+        normal_damping_coefficient * tangential_to_normal_damping_ * tangential_velocity;
     f.tangential_stiffness_n_per_m = tangential_stiffness;
     // Hertz: integral of F_n = 8/15 E* sqrt(R*) d^2.5 = 2/5 F_n d; Mindlin spring: S_t xi^2 / 2.
     f.elastic_energy_j +=
@@ -81,6 +85,7 @@ class HertzMindlin final : public ContactLaw {
   double youngs_pa_;
   double shear_pa_;
   double damping_factor_;  // 2 sqrt(5/6) beta
+  double tangential_to_normal_damping_;
 };
 
 // Coulomb limit of the tangential force: |F_t| <= mu * |load|. While sliding, the spring is
@@ -96,13 +101,15 @@ class Coulomb final : public ContactLaw {
       return;
     }
     const double limit = friction_coefficient_ * std::abs(f.friction_normal_load_n);
-    const double elastic = f.tangential_elastic_force_n.norm();
-    if (elastic > limit) {
-      const double scale = elastic > 0.0 ? limit / elastic : 0.0;
+    const double limit_squared = limit * limit;
+    const double elastic_squared = f.tangential_elastic_force_n.squaredNorm();
+    if (elastic_squared > limit_squared) {
+      const double scale = limit / std::sqrt(elastic_squared);  // elastic_squared > 0 here
       f.tangential_elastic_force_n *= scale;
       state.tangential_displacement_m *= scale;
       f.tangential_damping_force_n.setZero();
-    } else if ((f.tangential_elastic_force_n + f.tangential_damping_force_n).norm() > limit) {
+    } else if ((f.tangential_elastic_force_n + f.tangential_damping_force_n).squaredNorm() >
+               limit_squared) {
       f.tangential_damping_force_n.setZero();  // sticking spring, damping beyond the limit
     }
   }
@@ -298,6 +305,47 @@ class BondedParticleModel final : public BondLaw {
   double disk_scale_;
 };
 
+// Any chain, law by law.
+class GenericChain final : public ContactChain {
+ public:
+  explicit GenericChain(const std::vector<std::unique_ptr<ContactLaw>>& laws) {
+    for (const auto& law : laws) laws_.push_back(law.get());
+  }
+  void compute(const PairGeometry& g, PairState& state, ForceAccumulator& f) const override {
+    for (const ContactLaw* law : laws_) law->compute(g, state, f);
+  }
+  [[nodiscard]] bool fused() const override { return false; }
+
+ private:
+  std::vector<const ContactLaw*> laws_;
+};
+
+// A chain of final built-in classes: each call is direct and inlines.
+template <typename... Laws>
+class FusedChain final : public ContactChain {
+ public:
+  explicit FusedChain(std::tuple<const Laws*...> laws) : laws_(laws) {}
+  void compute(const PairGeometry& g, PairState& state, ForceAccumulator& f) const override {
+    std::apply([&](const Laws*... law) { (law->Laws::compute(g, state, f), ...); }, laws_);
+  }
+  [[nodiscard]] bool fused() const override { return true; }
+
+  // The chain if `laws` are exactly Laws... in this order, else null.
+  static std::unique_ptr<ContactChain> match(const std::vector<std::unique_ptr<ContactLaw>>& laws) {
+    if (laws.size() != sizeof...(Laws)) return nullptr;
+    const auto typed = [&]<std::size_t... k>(std::index_sequence<k...>) {
+      return std::tuple<const Laws*...>{dynamic_cast<const Laws*>(laws[k].get())...};
+    }
+    (std::index_sequence_for<Laws...>{});
+    const bool all =
+        std::apply([](const Laws*... law) { return ((law != nullptr) && ...); }, typed);
+    return all ? std::make_unique<FusedChain>(typed) : nullptr;
+  }
+
+ private:
+  std::tuple<const Laws*...> laws_;
+};
+
 template <typename Law>
 LawParameters complete_parameters(const LawInfo<Law>& info, const LawParameters& given) {
   LawParameters complete;
@@ -335,6 +383,16 @@ std::vector<std::string> keys_of(const Map& map) {
 }
 
 }  // namespace
+
+std::unique_ptr<ContactChain> make_contact_chain(
+    const std::vector<std::unique_ptr<ContactLaw>>& laws) {
+  for (auto* match :
+       {&FusedChain<HertzMindlin, Coulomb>::match, &FusedChain<HertzMindlin, Jkr, Coulomb>::match,
+        &FusedChain<HertzMindlin>::match, &FusedChain<HertzMindlin, Jkr>::match}) {
+    if (auto chain = match(laws)) return chain;
+  }
+  return std::make_unique<GenericChain>(laws);
+}
 
 bool BondLaw::compute_batch(const BondBatch& batch) const {
   return run_bond_batch(batch, [this](const BondGeometry& g, BondState& state, BondForce& f) {

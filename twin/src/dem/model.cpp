@@ -57,6 +57,7 @@ Model::Model(ModelSpec spec, const LawRegistry& registry) : spec_(std::move(spec
         entry.contact_laws.push_back(
             registry.create_contact_law(law.name, law.parameters, entry.material));
       }
+      entry.contact_chain = make_contact_chain(entry.contact_laws);
       entry.bond_law = interaction.bond_law ? registry.create_bond_law(
                                                   interaction.bond_law->name,
                                                   interaction.bond_law->parameters, entry.material)
@@ -66,6 +67,9 @@ Model::Model(ModelSpec spec, const LawRegistry& registry) : spec_(std::move(spec
         break;
       }
     }
+  }
+  for (Interaction& entry : table_) {  // pairs without a spec: an empty chain
+    if (!entry.contact_chain) entry.contact_chain = make_contact_chain(entry.contact_laws);
   }
 }
 

@@ -662,9 +662,7 @@ void Simulation::compute_forces() {
         g.effective_mass_kg = 1.0 / (inv_mi + inv_mass[j]);
         g.timestep_s = dt;
         ForceAccumulator acc;
-        for (const auto& law : m.interactions[pair_type]->contact_laws) {
-          law->compute(g, pair_state, acc);
-        }
+        m.interactions[pair_type]->contact_chain->compute(g, pair_state, acc);
         if (!acc.touching) continue;
         const Vec3 tangential = acc.tangential_elastic_force_n + acc.tangential_damping_force_n;
         const Vec3 f = (acc.normal_force_n + acc.normal_damping_force_n) * g.normal + tangential;
@@ -729,9 +727,7 @@ void Simulation::compute_forces() {
           g.effective_mass_kg = 1.0 / inv_mass[i];
           g.timestep_s = dt;
           ForceAccumulator acc;
-          for (const auto& law : m.wall_interactions[wall_row + wall]->contact_laws) {
-            law->compute(g, pair_state, acc);
-          }
+          m.wall_interactions[wall_row + wall]->contact_chain->compute(g, pair_state, acc);
           if (!acc.touching) return;
           const Vec3 tangential = acc.tangential_elastic_force_n + acc.tangential_damping_force_n;
           force[i] += (acc.normal_force_n + acc.normal_damping_force_n) * normal + tangential;

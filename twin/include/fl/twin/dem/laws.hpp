@@ -112,7 +112,21 @@ class ContactLaw {
   }
 };
 
-// One bond between two particles, fixed at creation.
+// A type pair's contact laws applied in order, as one call per pair (the step loop's entry).
+// make_contact_chain() fuses the usual built-in chains (hertz_mindlin [+ jkr] [+ coulomb]) so
+// that their code inlines into one function; any other chain runs law by law through
+// ContactLaw::compute. Both give the same forces: a fused chain is an optimisation only.
+class ContactChain {
+ public:
+  virtual ~ContactChain() = default;
+  virtual void compute(const PairGeometry& geometry, PairState& state,
+                       ForceAccumulator& force) const = 0;
+  [[nodiscard]] virtual bool fused() const = 0;
+};
+// The laws must outlive the chain (the Model owns both).
+std::unique_ptr<ContactChain> make_contact_chain(
+    const std::vector<std::unique_ptr<ContactLaw>>& laws);
+
 struct BondGeometry {
   Vec3 normal = Vec3::UnitZ();  // unit, from j towards i
   double distance_m = 0.0;

@@ -84,6 +84,7 @@ struct ModelSpec {
 struct Interaction {
   PairMaterial material;
   std::vector<std::unique_ptr<ContactLaw>> contact_laws;
+  std::unique_ptr<ContactChain> contact_chain;  // the laws above as one call (make_contact_chain)
   std::unique_ptr<BondLaw> bond_law;
   bool contact_between_bonded = false;
   [[nodiscard]] bool has_contact() const { return !contact_laws.empty(); }
