@@ -261,7 +261,7 @@ TriangleMesh make_icosphere(double radius, int subdivisions) {
       }
       return it->second;
     };
-    std::vector<Triangle> finer;
+    std::vector<IndexedTriangle> finer;
     finer.reserve(mesh.triangles.size() * 4);
     for (const auto& t : mesh.triangles) {
       const auto ab = midpoint(t[0], t[1]);

@@ -118,7 +118,7 @@ class MeshBuilder {
 
   void add_facet(const std::array<Eigen::Vector3d, 3>& corners) {
     ++facets_;
-    Triangle triangle{};
+    IndexedTriangle triangle{};
     for (std::size_t corner = 0; corner < 3; ++corner)
       triangle[corner] = welder_.add(corners[corner]);
     if (triangle[0] == triangle[1] || triangle[1] == triangle[2] || triangle[0] == triangle[2]) {
@@ -156,7 +156,7 @@ class MeshBuilder {
   const std::string& source_;
   const StlReadOptions& options_;
   VertexWelder welder_;
-  std::vector<Triangle> triangles_;
+  std::vector<IndexedTriangle> triangles_;
   std::size_t facets_ = 0;
   std::size_t degenerate_ = 0;
 };
@@ -409,7 +409,7 @@ StlReadResult read_stl(const std::filesystem::path& file, const StlReadOptions& 
 }
 
 std::string format_stl(const TriangleMesh& mesh, const StlWriteOptions& options) {
-  const auto facet_normal = [&](const Triangle& t) -> Eigen::Vector3d {
+  const auto facet_normal = [&](const IndexedTriangle& t) -> Eigen::Vector3d {
     const auto& a = mesh.vertices[t[0]];
     const Eigen::Vector3d normal = (mesh.vertices[t[1]] - a).cross(mesh.vertices[t[2]] - a);
     const double length = normal.norm();

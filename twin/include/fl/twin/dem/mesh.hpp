@@ -16,11 +16,12 @@
 
 namespace fl::dem {
 
-using Triangle = std::array<std::uint32_t, 3>;
+// Vertex indices of one triangle (the engine's wall triangle, model.hpp, holds coordinates).
+using IndexedTriangle = std::array<std::uint32_t, 3>;
 
 struct TriangleMesh {
   std::vector<Eigen::Vector3d> vertices;
-  std::vector<Triangle> triangles;  // vertex indices, counter-clockwise seen from outside
+  std::vector<IndexedTriangle> triangles;  // vertex indices, counter-clockwise seen from outside
 };
 
 struct Aabb {

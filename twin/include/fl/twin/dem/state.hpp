@@ -28,6 +28,11 @@ struct WallState {
   Vec3 linear_velocity_m_per_s = Vec3::Zero();
   Vec3 angular_velocity_rad_per_s = Vec3::Zero();  // about the moved pivot
   Vec3 surface_velocity_m_per_s = Vec3::Zero();    // tangential part is used
+
+  // Where a point of the wall's reference geometry is now.
+  [[nodiscard]] Vec3 place(const Vec3& reference_m) const {
+    return rotation * (reference_m - pivot_m) + pivot_m + translation_m;
+  }
 };
 
 struct State {
