@@ -26,4 +26,7 @@ endif()
 if(FL_BUILD_BENCH AND EXISTS ${CMAKE_CURRENT_LIST_DIR}/bench/bench_dem.cpp)
   add_executable(bench_dem ${CMAKE_CURRENT_LIST_DIR}/bench/bench_dem.cpp)
   target_link_libraries(bench_dem PRIVATE fl_twin_dem benchmark::benchmark fl_build_flags)
+  # One timed scenario in the peers' output format (bench/dem_race/run.sh).
+  add_executable(dem_race ${CMAKE_CURRENT_LIST_DIR}/bench/dem_race.cpp)
+  target_link_libraries(dem_race PRIVATE fl_twin_dem CLI11::CLI11 fl_build_flags)
 endif()
