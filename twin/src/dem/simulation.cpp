@@ -85,7 +85,11 @@ struct Simulation::Impl {
   std::vector<std::uint32_t> partner_offsets;  // per particle: bonded partners (CSR)
   std::vector<std::uint32_t> partner_particle;
   bool partners_valid = false;  // until a bond breaks, particles are re-ordered or added
-  std::vector<std::uint32_t> bonded_stamp;  // rebuild scratch: i + 1 at i's bonded partners
+  // neighbour-list build, per thread
+  std::vector<std::uint32_t> build_begin;
+  std::vector<std::vector<std::uint32_t>> build_pair_j;
+  std::vector<std::vector<PairState>> build_pair_states;
+  std::vector<std::vector<std::uint32_t>> build_stamps;
 
   // walls: current geometry and history
   std::vector<Vec3> plane_point_m;
@@ -436,7 +440,13 @@ void Simulation::rebuild_neighbors() {
   Impl& m = *impl_;
   State& s = state_;
   const std::size_t n = s.size();
-  const std::size_t capacity_before = m.pair_j.capacity() + m.pair_states.capacity();
+  const auto list_capacity = [&m] {
+    std::size_t capacity = m.pair_j.capacity() + m.pair_states.capacity();
+    for (const auto& buffer : m.build_pair_j) capacity += buffer.capacity();
+    for (const auto& buffer : m.build_pair_states) capacity += buffer.capacity();
+    return capacity;
+  };
+  const std::size_t capacity_before = list_capacity();
 
   // 1. history of active pairs, to carry into the new list
   m.carried.clear();
@@ -501,7 +511,6 @@ void Simulation::rebuild_neighbors() {
     }
     m.partners_valid = true;
   }
-  m.bonded_stamp.assign(n, 0);
 
   // 5. half neighbour list from the 27 surrounding cells
   std::sort(m.carried.begin(), m.carried.end(),
@@ -518,59 +527,100 @@ void Simulation::rebuild_neighbors() {
             [](const CarriedContact& a, const CarriedContact& b) {
               return a.i != b.i ? a.i < b.i : a.j < b.j;
             });
-  m.pair_j.clear();
-  m.pair_states.clear();
+  // Each thread lists the pairs of a contiguous range of i into its own buffers; the buffers
+  // are then joined in thread order. A particle's segment does not depend on the split, so the
+  // list is the same for any thread count.
   m.pair_offsets.resize(n + 1);
-  std::size_t carried_next = 0;
   const int dx = m.cell_dims.x();
   const int dy = m.cell_dims.y();
   const int dz = m.cell_dims.z();
-  for (std::uint32_t i = 0; i < n; ++i) {
-    m.pair_offsets[i] = static_cast<std::uint32_t>(m.pair_j.size());
-    const Vec3 xi = s.position_m[i];
-    const double ri = s.radius_m[i];
-    const std::uint32_t ti = s.type[i];
-    for (std::uint32_t p = m.partner_offsets[i]; p < m.partner_offsets[i + 1]; ++p) {
-      m.bonded_stamp[m.partner_particle[p]] = i + 1;
-    }
-    const int cell = static_cast<int>(m.particle_cell[i]);
-    const int cx = cell % dx;
-    const int cy = (cell / dx) % dy;
-    const int cz = cell / (dx * dy);
-    for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, dz - 1); ++z) {
-      for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, dy - 1); ++y) {
-        const int row = (z * dy + y) * dx;
-        const auto begin = m.cell_start[static_cast<std::size_t>(row + std::max(cx - 1, 0))];
-        const auto end = m.cell_start[static_cast<std::size_t>(row + std::min(cx + 1, dx - 1)) + 1];
-        for (std::uint32_t c = begin; c < end; ++c) {
-          const std::uint32_t j = m.cell_particles[c];
-          if (j <= i) continue;
-          const std::size_t pair_type = ti * m.type_count + s.type[j];
-          const Interaction& interaction = *m.interactions[pair_type];
-          if (!interaction.has_contact()) continue;
-          const double reach = ri + s.radius_m[j] + m.pair_range_m[pair_type] + m.skin;
-          if ((xi - s.position_m[j]).squaredNorm() >= reach * reach) continue;
-          if (!interaction.contact_between_bonded && m.bonded_stamp[j] == i + 1) continue;
-          m.pair_j.push_back(j);
+  const auto build_threads = static_cast<std::size_t>(m.active_threads);
+  m.build_pair_j.resize(build_threads);
+  m.build_pair_states.resize(build_threads);
+  m.build_stamps.resize(build_threads);
+  m.build_begin.assign(build_threads + 1, 0);
+  for (std::size_t t = 0; t <= build_threads; ++t) {
+    m.build_begin[t] = static_cast<std::uint32_t>(n * t / build_threads);
+  }
+#pragma omp parallel num_threads(m.active_threads) if (m.active_threads > 1)
+  {
+    const auto t = static_cast<std::size_t>(omp_get_thread_num());
+    std::vector<std::uint32_t>& pair_j = m.build_pair_j[t];
+    std::vector<PairState>& pair_states = m.build_pair_states[t];
+    std::vector<std::uint32_t>& stamp = m.build_stamps[t];  // i + 1 at i's bonded partners
+    pair_j.clear();
+    pair_states.clear();
+    stamp.assign(n, 0);
+    const std::uint32_t i_begin = m.build_begin[t];
+    const std::uint32_t i_end = m.build_begin[t + 1];
+    std::size_t carried_next = static_cast<std::size_t>(
+        std::lower_bound(m.carried.begin(), m.carried.end(), i_begin,
+                         [](const CarriedContact& c, std::uint32_t i) { return c.i < i; }) -
+        m.carried.begin());
+    for (std::uint32_t i = i_begin; i < i_end; ++i) {
+      m.pair_offsets[i] = static_cast<std::uint32_t>(pair_j.size());  // local; shifted below
+      const Vec3 xi = s.position_m[i];
+      const double ri = s.radius_m[i];
+      const std::uint32_t ti = s.type[i];
+      for (std::uint32_t p = m.partner_offsets[i]; p < m.partner_offsets[i + 1]; ++p) {
+        stamp[m.partner_particle[p]] = i + 1;
+      }
+      const int cell = static_cast<int>(m.particle_cell[i]);
+      const int cx = cell % dx;
+      const int cy = (cell / dx) % dy;
+      const int cz = cell / (dx * dy);
+      for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, dz - 1); ++z) {
+        for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, dy - 1); ++y) {
+          const int row = (z * dy + y) * dx;
+          const auto begin = m.cell_start[static_cast<std::size_t>(row + std::max(cx - 1, 0))];
+          const auto end =
+              m.cell_start[static_cast<std::size_t>(row + std::min(cx + 1, dx - 1)) + 1];
+          for (std::uint32_t c = begin; c < end; ++c) {
+            const std::uint32_t j = m.cell_particles[c];
+            if (j <= i) continue;
+            const std::size_t pair_type = ti * m.type_count + s.type[j];
+            const Interaction& interaction = *m.interactions[pair_type];
+            if (!interaction.has_contact()) continue;
+            const double reach = ri + s.radius_m[j] + m.pair_range_m[pair_type] + m.skin;
+            if ((xi - s.position_m[j]).squaredNorm() >= reach * reach) continue;
+            if (!interaction.contact_between_bonded && stamp[j] == i + 1) continue;
+            pair_j.push_back(j);
+          }
         }
       }
-    }
-    // sorted segment: deterministic order and merge with the carried history
-    const auto segment_begin = m.pair_j.begin() + m.pair_offsets[i];
-    std::sort(segment_begin, m.pair_j.end());
-    for (auto it = segment_begin; it != m.pair_j.end(); ++it) {
-      PairState state;
-      while (carried_next < m.carried.size() &&
-             (m.carried[carried_next].i < i ||
-              (m.carried[carried_next].i == i && m.carried[carried_next].j < *it))) {
-        ++carried_next;  // out of reach: history ends
+      // sorted segment: deterministic order and merge with the carried history
+      const auto segment_begin = pair_j.begin() + m.pair_offsets[i];
+      std::sort(segment_begin, pair_j.end());
+      for (auto it = segment_begin; it != pair_j.end(); ++it) {
+        PairState state;
+        while (carried_next < m.carried.size() &&
+               (m.carried[carried_next].i < i ||
+                (m.carried[carried_next].i == i && m.carried[carried_next].j < *it))) {
+          ++carried_next;  // out of reach: history ends
+        }
+        if (carried_next < m.carried.size() && m.carried[carried_next].i == i &&
+            m.carried[carried_next].j == *it) {
+          state = m.carried[carried_next++].state;
+        }
+        pair_states.push_back(state);
       }
-      if (carried_next < m.carried.size() && m.carried[carried_next].i == i &&
-          m.carried[carried_next].j == *it) {
-        state = m.carried[carried_next++].state;
-      }
-      m.pair_states.push_back(state);
     }
+  }
+  std::size_t total_pairs = 0;
+  for (std::size_t t = 0; t < build_threads; ++t) {
+    const auto shift = static_cast<std::uint32_t>(total_pairs);
+    for (std::uint32_t i = m.build_begin[t]; i < m.build_begin[t + 1]; ++i) {
+      m.pair_offsets[i] += shift;
+    }
+    total_pairs += m.build_pair_j[t].size();
+  }
+  m.pair_j.resize(total_pairs);
+  m.pair_states.resize(total_pairs);
+  for (std::size_t t = 0, at = 0; t < build_threads; ++t) {
+    std::copy(m.build_pair_j[t].begin(), m.build_pair_j[t].end(), m.pair_j.begin() + at);
+    std::copy(m.build_pair_states[t].begin(), m.build_pair_states[t].end(),
+              m.pair_states.begin() + at);
+    at += m.build_pair_j[t].size();
   }
   m.pair_offsets[n] = static_cast<std::uint32_t>(m.pair_j.size());
   std::copy(s.position_m.begin(), s.position_m.end(), m.build_position_m.begin());
@@ -588,8 +638,7 @@ void Simulation::rebuild_neighbors() {
   }
   m.particle_begin[threads] = static_cast<std::uint32_t>(n);
 
-  if (m.prepared && m.forces_valid &&
-      m.pair_j.capacity() + m.pair_states.capacity() != capacity_before) {
+  if (m.prepared && m.forces_valid && list_capacity() != capacity_before) {
     ++stats_.neighbor_capacity_growths;
   }
   stats_.neighbor_pairs = m.pair_j.size();

@@ -226,6 +226,39 @@ TEST(DemDeterminism, SmallSystemsRunOnFewerThreads) {
   EXPECT_EQ(sim.thread_count(), 2);
 }
 
+TEST(DemDeterminism, NeighbourListDoesNotDependOnThreads) {
+  // Threads list the pairs of their own particle ranges and join them: the same pairs for any
+  // count, so one thread and two start from the same list and the same first forces (summed in
+  // another order: equal to rounding).
+  std::vector<State> prepared;
+  std::vector<std::size_t> pairs;
+  for (const int threads : {1, 2}) {
+    ModelSpec spec =
+        test::ball_model({test::hertz(0.5), test::coulomb(0.3)}, 1e-4, Vec3(0, 0, -9.81), true);
+    spec.thread_count = threads;
+    spec.min_particles_per_thread = 1;
+    Simulation sim(std::make_shared<Model>(spec));
+    for (int k = 0; k < 200; ++k) {  // a 5 x 5 x 8 pile at 7.9 mm: every neighbour overlaps
+      sim.add_sphere(
+          {Vec3((k % 5) * 0.0079, (k / 5 % 5) * 0.0079, 0.0039 + (k / 25) * 0.0079), kRadius, 0});
+    }
+    sim.prepare();
+    EXPECT_EQ(sim.active_thread_count(), threads);
+    pairs.push_back(sim.stats().neighbor_pairs);
+    prepared.push_back(sim.state());
+  }
+  // 3 axes x (4 x 5 x 8 or 5 x 5 x 7) face neighbours = 160 + 160 + 175, plus diagonals in reach
+  EXPECT_GE(pairs[0], 495U);
+  EXPECT_EQ(pairs[0], pairs[1]);
+  ASSERT_EQ(prepared[0].size(), prepared[1].size());
+  for (std::size_t k = 0; k < prepared[0].size(); ++k) {
+    EXPECT_LT((prepared[0].force_n[k] - prepared[1].force_n[k]).norm(),
+              1e-12 * (1.0 + prepared[0].force_n[k].norm()))
+        << k;
+  }
+  EXPECT_GT(prepared[0].force_n[0].norm(), 0.0);  // the forces compared are not all zero
+}
+
 TEST(DemDeterminism, SameSeedSameThreadsBitIdentical) {
   for (const int threads : {1, 2}) {
     const State a = run_bed(threads);
