@@ -2,6 +2,8 @@
 //   linectl run --plant fast --duration 10m --seed 1 [--json kpis.json] [--ledger ledger.csv]
 //   linectl run --realtime ...      the same loop on the 10 ms real-time schedule
 //   linectl config check FILE       validate a line configuration
+//   linectl record / replay         camera recordings and their regression replay
+//   (record_replay.hpp)
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
@@ -26,6 +28,7 @@
 #include "fl/twin/fast_plant.hpp"
 #include "fl/twin/fast_plant_config.hpp"
 #include "plant_io.hpp"
+#include "record_replay.hpp"
 
 namespace fl::apps {
 namespace {
@@ -282,12 +285,19 @@ int main(int argc, char** argv) {
   check->add_option("file", check_path, "line configuration (YAML)")->required();
   config->require_subcommand(1);
 
+  RecordArgs record_args;
+  CLI::App* record = add_record_subcommand(app, record_args);
+  ReplayArgs replay_args;
+  CLI::App* replay = add_replay_subcommand(app, replay_args);
+
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
   std::signal(SIGINT, on_signal);
   std::signal(SIGTERM, on_signal);
   try {
     if (run->parsed()) return run_command(run_args);
+    if (record->parsed()) return record_command(record_args);
+    if (replay->parsed()) return replay_command(replay_args);
     if (check->parsed()) {
       fl::load_line_config(check_path);
       spdlog::info("{}: valid", check_path);

@@ -1,0 +1,132 @@
+#include "fl/vision/record/frame_source.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <opencv2/videoio.hpp>
+#include <stdexcept>
+
+namespace fl::vision::record {
+namespace {
+
+bool is_image_file(const std::filesystem::path& path) {
+  static constexpr std::array<std::string_view, 8> kExtensions = {".png", ".jpg",  ".jpeg", ".bmp",
+                                                                  ".tif", ".tiff", ".pgm",  ".ppm"};
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return std::find(kExtensions.begin(), kExtensions.end(), extension) != kExtensions.end();
+}
+
+// Grey and BGRA frames become BGR: the estimator and the recording take BGR.
+cv::Mat to_bgr(const cv::Mat& image) {
+  if (image.channels() == 3) return image;
+  cv::Mat bgr;
+  cv::cvtColor(image, bgr, image.channels() == 1 ? cv::COLOR_GRAY2BGR : cv::COLOR_BGRA2BGR);
+  return bgr;
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------ directory
+
+DirectoryFrameSource::DirectoryFrameSource(const std::filesystem::path& directory,
+                                           std::int64_t period_ns)
+    : directory_(directory), period_ns_(period_ns) {
+  if (period_ns <= 0) throw std::invalid_argument("frame period must be positive");
+  if (!std::filesystem::is_directory(directory)) {
+    throw std::runtime_error(directory.string() + ": not a directory");
+  }
+  for (const auto& entry : std::filesystem::directory_iterator(directory)) {
+    if (entry.is_regular_file() && is_image_file(entry.path())) files_.push_back(entry.path());
+  }
+  if (files_.empty()) {
+    throw std::runtime_error(directory.string() +
+                             ": no image files (png, jpg, bmp, tif, pgm, ppm) in it");
+  }
+  std::sort(files_.begin(), files_.end());
+}
+
+std::optional<SourceFrame> DirectoryFrameSource::next() {
+  if (next_ >= files_.size()) return std::nullopt;
+  const std::filesystem::path& file = files_[next_];
+  // IMREAD_UNCHANGED keeps a 16-bit file 16-bit, so that it is refused below instead of
+  // being scaled silently.
+  cv::Mat image = cv::imread(file.string(), cv::IMREAD_UNCHANGED);
+  if (image.empty()) throw std::runtime_error(file.string() + ": not a readable image");
+  if (image.depth() != CV_8U) {
+    throw std::runtime_error(file.string() + ": not an 8-bit image (recordings are 8-bit)");
+  }
+  SourceFrame frame;
+  frame.bgr = to_bgr(image);
+  frame.sequence = static_cast<std::uint32_t>(next_);
+  frame.time_ns = static_cast<std::int64_t>(next_) * period_ns_;
+  frame.origin = file.filename().string();
+  ++next_;
+  return frame;
+}
+
+std::string DirectoryFrameSource::describe() const {
+  return "directory " + directory_.string() + " (" + std::to_string(files_.size()) + " images)";
+}
+
+// ------------------------------------------------------------------ VideoCapture
+
+struct VideoCaptureFrameSource::Capture {
+  cv::VideoCapture capture;
+  cv::Mat frame;
+};
+
+VideoCaptureFrameSource::VideoCaptureFrameSource(const std::filesystem::path& file,
+                                                 std::int64_t fallback_period_ns)
+    : capture_(std::make_unique<Capture>()), description_("video file " + file.string()) {
+  if (!std::filesystem::is_regular_file(file)) {
+    throw std::runtime_error(file.string() + ": no such video file");
+  }
+  if (!capture_->capture.open(file.string(), cv::CAP_FFMPEG) &&
+      !capture_->capture.open(file.string())) {
+    throw std::runtime_error(file.string() + ": VideoCapture cannot open it");
+  }
+  const double fps = capture_->capture.get(cv::CAP_PROP_FPS);
+  period_ns_ = std::isfinite(fps) && fps > 0.0 ? static_cast<std::int64_t>(std::llround(1e9 / fps))
+                                               : fallback_period_ns;
+}
+
+VideoCaptureFrameSource::VideoCaptureFrameSource(int device_index)
+    : capture_(std::make_unique<Capture>()),
+      description_("camera device " + std::to_string(device_index)),
+      device_(true) {
+  if (!capture_->capture.open(device_index)) {
+    throw std::runtime_error("camera device " + std::to_string(device_index) +
+                             ": VideoCapture cannot open it (/dev/video" +
+                             std::to_string(device_index) + ")");
+  }
+}
+
+VideoCaptureFrameSource::~VideoCaptureFrameSource() = default;
+
+std::optional<SourceFrame> VideoCaptureFrameSource::next() {
+  if (!capture_->capture.read(capture_->frame) || capture_->frame.empty()) return std::nullopt;
+  if (capture_->frame.depth() != CV_8U) {
+    throw std::runtime_error(description_ + ": frame " + std::to_string(sequence_) +
+                             " is not 8-bit");
+  }
+  SourceFrame frame;
+  frame.bgr = to_bgr(capture_->frame).clone();
+  frame.sequence = sequence_;
+  if (device_) {
+    const auto now = std::chrono::steady_clock::now();
+    if (sequence_ == 0) first_ = now;
+    frame.time_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(now - first_).count();
+  } else {
+    frame.time_ns = static_cast<std::int64_t>(sequence_) * period_ns_;
+  }
+  frame.origin = description_ + " frame " + std::to_string(sequence_);
+  ++sequence_;
+  return frame;
+}
+
+}  // namespace fl::vision::record

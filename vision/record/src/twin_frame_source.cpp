@@ -1,0 +1,47 @@
+#include "fl/vision/record/twin_frame_source.hpp"
+
+#include <stdexcept>
+
+namespace fl::vision::record {
+
+TwinFrameSource::TwinFrameSource(std::shared_ptr<const render::FilletRenderer> renderer,
+                                 const TwinScene& scene, TwinCameraSettings settings,
+                                 std::string camera_name)
+    : renderer_(std::move(renderer)), scene_(scene), settings_(settings) {
+  if (!renderer_) throw std::invalid_argument("TwinFrameSource needs a renderer");
+  if (settings_.width_px <= 0 || settings_.height_px <= 0 ||
+      !(settings_.field_along_travel_mm > 0.0)) {
+    throw std::invalid_argument("twin camera " + camera_name + ": size and field must be positive");
+  }
+  camera_ = render::make_top_down_camera(
+      settings_.width_px, settings_.height_px,
+      settings_.field_along_travel_mm / static_cast<double>(settings_.width_px));
+  calibration_.camera_name = std::move(camera_name);
+  calibration_.image_width_px = settings_.width_px;
+  calibration_.image_height_px = settings_.height_px;
+  calibration_.image_to_belt = camera_.belt_to_image.inv();
+  calibration_.reprojection_rms_px = 0.0;
+}
+
+std::optional<SourceFrame> TwinFrameSource::next() {
+  render::Scene scene;
+  scene.fillets = scene_.fillets();
+  scene.belt = settings_.belt;
+  scene.imaging = settings_.imaging;
+  scene.seed = settings_.seed + sequence_;
+  scene.supersampling = settings_.supersampling;
+  SourceFrame frame;
+  frame.bgr = renderer_->render(camera_, scene).bgr;
+  frame.time_ns = scene_.time_ns();
+  frame.sequence = sequence_++;
+  frame.origin = "twin camera " + calibration_.camera_name;
+  return frame;
+}
+
+std::string TwinFrameSource::describe() const {
+  return "twin camera " + calibration_.camera_name + " (" + std::to_string(settings_.width_px) +
+         " x " + std::to_string(settings_.height_px) + " px over " +
+         std::to_string(settings_.field_along_travel_mm) + " mm)";
+}
+
+}  // namespace fl::vision::record

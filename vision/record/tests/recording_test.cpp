@@ -1,0 +1,174 @@
+// Recording round trip and the malformed recordings a replay must refuse with an error that
+// names the record: truncated file, corrupted chunk (CRC), unknown schema, a frame that does
+// not decode.
+#include "fl/vision/record/recording.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "fl/mcap/writer.hpp"
+#include "fl/vision/record/replay.hpp"
+
+namespace fl::vision::record {
+namespace {
+
+std::filesystem::path temp_file(const std::string& name) {
+  return std::filesystem::temp_directory_path() /
+         ("fl_recording_test_" + std::to_string(::getpid()) + "_" + name);
+}
+
+BeltCalibration small_calibration() {
+  BeltCalibration calibration;
+  calibration.camera_name = "orientation";
+  calibration.image_width_px = 64;  // tiny frames: the file format does not care
+  calibration.image_height_px = 48;
+  // 1 mm/px, origin at the image centre, belt y up the image (as the twin's top-down camera).
+  calibration.image_to_belt = cv::Matx33d(1, 0, -32, 0, -1, 24, 0, 0, 1);
+  return calibration;
+}
+
+cv::Mat blue_belt() { return {48, 64, CV_8UC3, cv::Scalar(165, 105, 35)}; }
+
+// Two scans, one frame with its estimates, on the orientation camera.
+void write_small_recording(const std::filesystem::path& path) {
+  RecordingWriter writer(path, {9, {{"source", "test"}}});
+  writer.add_camera(CameraId::kOrientation, small_calibration());
+  writer.add_camera(CameraId::kFinal, std::nullopt);
+  writer.attach_line_config("line: {}\n");
+  CameraFrame frame;
+  frame.frame_time_ns = 0;
+  frame.sequence = 1;
+  writer.write_frame(CameraId::kOrientation, 1, 0, blue_belt());
+  writer.write_estimates(CameraId::kOrientation, 10'000'000, frame);
+  InputImage in;
+  OutputImage out;
+  for (std::uint64_t scan = 0; scan < 2; ++scan) {
+    in.time_ns = static_cast<std::int64_t>(scan) * 10'000'000;
+    in.drives[3].encoder_counts = static_cast<std::int64_t>(scan) * 50;
+    out.drives[3].speed_mps = 0.45F;
+    out.state = LineState::kStarting;
+    writer.write_scan(scan, in, out);
+  }
+  writer.close();
+}
+
+Bytes read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+void write_bytes(const std::filesystem::path& path, const Bytes& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
+}
+
+std::string load_error(const std::filesystem::path& path) {
+  try {
+    (void)load_recording(path);
+  } catch (const RecordingError& error) {
+    return error.what();
+  }
+  return "";
+}
+
+TEST(Recording, RoundTripsFramesEstimatesAndScans) {
+  const auto path = temp_file("round_trip.mcap");
+  write_small_recording(path);
+  const Recording recording = load_recording(path);
+  EXPECT_EQ(recording.info.at("source"), "test");
+  EXPECT_EQ(recording.info.at("format_version"), "1");
+  ASSERT_TRUE(recording.line_config_yaml.has_value());
+  const RecordedCamera& camera = recording.cameras[index(CameraId::kOrientation)];
+  EXPECT_TRUE(camera.has_frames);
+  ASSERT_TRUE(camera.calibration.has_value());
+  EXPECT_EQ(camera.calibration->image_width_px, 64);
+  ASSERT_EQ(camera.frames.size(), 1U);
+  const cv::Mat decoded = decode_frame(camera.frames.at(1));
+  EXPECT_EQ(cv::norm(decoded, blue_belt(), cv::NORM_INF), 0.0);  // PNG is lossless
+  EXPECT_FALSE(recording.cameras[index(CameraId::kFinal)].has_frames);
+  ASSERT_EQ(recording.estimates.size(), 1U);
+  EXPECT_EQ(recording.estimates[0].log_time_ns, 10'000'000);
+  ASSERT_EQ(recording.scans.size(), 2U);
+  EXPECT_EQ(recording.scans[1].input.drives[3].encoder_counts, 50);
+  ASSERT_TRUE(recording.scans[1].recorded_output.has_value());
+  EXPECT_EQ(recording.scans[1].recorded_output->drives[3].speed_mps, 0.45F);
+  EXPECT_EQ(recording.scans[1].recorded_output->state, LineState::kStarting);
+  std::filesystem::remove(path);
+}
+
+TEST(Recording, TruncatedFileIsAnErrorNamingTheFile) {
+  const auto path = temp_file("truncated.mcap");
+  write_small_recording(path);
+  Bytes bytes = read_bytes(path);
+  bytes.resize(bytes.size() / 2);  // cut in the middle, as a recorder killed mid-write
+  write_bytes(path, bytes);
+  const std::string error = load_error(path);
+  EXPECT_NE(error.find(path.string()), std::string::npos) << error;
+  EXPECT_NE(error.find("not a readable MCAP recording"), std::string::npos) << error;
+  std::filesystem::remove(path);
+}
+
+TEST(Recording, CorruptedChunkFailsItsCrc) {
+  const auto path = temp_file("crc.mcap");
+  write_small_recording(path);
+  Bytes bytes = read_bytes(path);
+  // The first chunk's compressed records begin shortly after the header and the metadata:
+  // find the zstd frame magic (28 b5 2f fd) and damage a byte a little after it.
+  const Bytes magic = {0x28, 0xb5, 0x2f, 0xfd};
+  const auto at = std::search(bytes.begin(), bytes.end(), magic.begin(), magic.end());
+  ASSERT_NE(at, bytes.end());
+  *(at + 12) ^= 0xFF;
+  write_bytes(path, bytes);
+  const std::string error = load_error(path);
+  EXPECT_NE(error.find(path.string()), std::string::npos) << error;
+  EXPECT_FALSE(error.empty());
+  std::filesystem::remove(path);
+}
+
+TEST(Recording, UnknownSchemaNamesTheChannel) {
+  const auto path = temp_file("unknown_schema.mcap");
+  {
+    mcap::Writer writer(path, {});
+    const std::string schema = "int32 x\n";
+    const auto schema_id =
+        writer.add_schema("std_msgs/msg/Int32", "ros2msg",
+                          {reinterpret_cast<const std::uint8_t*>(schema.data()), schema.size()});
+    writer.add_channel(schema_id, "/plc/counter", "cdr");
+    writer.close();
+  }
+  const std::string error = load_error(path);
+  EXPECT_NE(error.find("/plc/counter"), std::string::npos) << error;
+  EXPECT_NE(error.find("std_msgs/msg/Int32"), std::string::npos) << error;
+  std::filesystem::remove(path);
+}
+
+TEST(Recording, FrameThatDoesNotDecodeNamesTheFrame) {
+  const auto path = temp_file("bad_frame.mcap");
+  write_small_recording(path);
+  Recording recording = load_recording(path);
+  RecordedFrame& frame = recording.cameras[index(CameraId::kOrientation)].frames.at(1);
+  frame.data.resize(frame.data.size() / 2);  // a PNG cut short
+  try {
+    (void)decode_frame(frame);
+    FAIL() << "a cut PNG decoded";
+  } catch (const RecordingError& error) {
+    const std::string what = error.what();
+    EXPECT_NE(what.find("/camera/orientation/image message 1"), std::string::npos) << what;
+    EXPECT_NE(what.find("does not decode"), std::string::npos) << what;
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(Recording, MissingFileIsAnError) {
+  EXPECT_NE(load_error(temp_file("does_not_exist.mcap")).find("no such recording"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace fl::vision::record
