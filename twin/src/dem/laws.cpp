@@ -237,6 +237,76 @@ bool run_bond_batch(const BondBatch& b, PerBond&& per_bond) {
   return broke;
 }
 
+// How a bond's normal force follows its stretch: the part the bpm variants differ in.
+// force_n: the normal force (> 0 compression) for this step, updating the policy's history in
+// the bond state; normal_energy_j: the energy stored in the normal direction.
+struct ElasticNormal {  // bpm: F_n = -k A (d - d0), eq. 3.4 integrated exactly
+  explicit ElasticNormal(const LawParameters&) {}
+  double force_n(const BondGeometry& g, BondState&, double stiffness_n_per_m, double) const {
+    return -stiffness_n_per_m * (g.distance_m - g.rest_length_m);
+  }
+  [[nodiscard]] double normal_energy_j(const BondState& state, double stiffness_n_per_m,
+                                       double) const {
+    return state.normal_force_n * state.normal_force_n / (2.0 * stiffness_n_per_m);
+  }
+};
+
+// Standard linear solid: the bpm spring in parallel with a Maxwell arm (spring k_m A, dashpot
+// of relaxation time tau). A step stretch first meets k + k_m, then relaxes to k with time
+// constant tau: visco-elastic relaxation and rate-dependent stiffness in compression (thesis
+// 4.3). The arm's force is integrated exactly over a step: F_m <- F_m e^(-dt/tau) - k_m A dx.
+// History: scalars[0] = the arm's force.
+struct MaxwellNormal {
+  explicit MaxwellNormal(const LawParameters& p)
+      : arm_stiffness_n_per_m3(p.at("relaxation_stiffness_n_per_m3")),
+        relaxation_time_s(p.at("relaxation_time_s")) {}
+  double force_n(const BondGeometry& g, BondState& state, double stiffness_n_per_m,
+                 double area_m2) const {
+    const double stretch_rate = g.relative_velocity_m_per_s.dot(g.normal);  // d(distance)/dt
+    double& arm = state.scalars[0];
+    arm = arm * std::exp(-g.timestep_s / relaxation_time_s) -
+          arm_stiffness_n_per_m3 * area_m2 * stretch_rate * g.timestep_s;
+    return -stiffness_n_per_m * (g.distance_m - g.rest_length_m) + arm;
+  }
+  [[nodiscard]] double normal_energy_j(const BondState& state, double stiffness_n_per_m,
+                                       double area_m2) const {
+    const double arm = state.scalars[0];
+    const double spring = state.normal_force_n - arm;
+    return spring * spring / (2.0 * stiffness_n_per_m) +
+           arm * arm / (2.0 * arm_stiffness_n_per_m3 * area_m2);
+  }
+  double arm_stiffness_n_per_m3;
+  double relaxation_time_s;
+};
+
+// Perfectly plastic beyond a yield stress: the rest length moves so that |F_n| stays at
+// sigma_y A; unloading is elastic from the new rest length, which leaves a permanent set
+// (thesis 4.3: permanent strain after compression). History: scalars[1] = rest length shift.
+struct PlasticNormal {
+  explicit PlasticNormal(const LawParameters& p)
+      : yield_strength_pa(p.at("normal_yield_strength_pa")) {}
+  double force_n(const BondGeometry& g, BondState& state, double stiffness_n_per_m,
+                 double area_m2) const {
+    double& shift = state.scalars[1];
+    const double elastic_stretch = g.distance_m - g.rest_length_m - shift;
+    const double yield_stretch = yield_strength_pa * area_m2 / stiffness_n_per_m;
+    if (elastic_stretch > yield_stretch) {
+      shift += elastic_stretch - yield_stretch;
+    } else if (elastic_stretch < -yield_stretch) {
+      shift += elastic_stretch + yield_stretch;
+    }
+    return -stiffness_n_per_m * (g.distance_m - g.rest_length_m - shift);
+  }
+  [[nodiscard]] double normal_energy_j(const BondState& state, double stiffness_n_per_m,
+                                       double) const {
+    return state.normal_force_n * state.normal_force_n / (2.0 * stiffness_n_per_m);
+  }
+  double yield_strength_pa;
+};
+
+// Bonded particle model (see above) with a normal-force policy: "bpm" (ElasticNormal),
+// "bpm_viscoelastic" (MaxwellNormal), "bpm_plastic" (PlasticNormal).
+template <typename Normal>
 class BondedParticleModel final : public BondLaw {
  public:
   BondedParticleModel(const LawParameters& parameters, const PairMaterial&)
@@ -244,7 +314,8 @@ class BondedParticleModel final : public BondLaw {
         shear_stiffness_(parameters.at("shear_stiffness_n_per_m3")),
         normal_strength_(parameters.at("normal_strength_pa")),
         shear_strength_(parameters.at("shear_strength_pa")),
-        disk_scale_(parameters.at("bonded_disk_scale")) {}
+        disk_scale_(parameters.at("bonded_disk_scale")),
+        normal_(parameters) {}
 
   void compute(const BondGeometry& g, BondState& state, BondForce& f) const override {
     update(g, state, f);
@@ -260,7 +331,7 @@ class BondedParticleModel final : public BondLaw {
   [[nodiscard]] double elastic_energy_j(const BondState& state,
                                         double bond_radius_m) const override {
     const double area = area_m2(bond_radius_m);
-    return state.normal_force_n * state.normal_force_n / (2.0 * normal_stiffness_ * area) +
+    return normal_.normal_energy_j(state, normal_stiffness_ * area, area) +
            state.shear_force_n.squaredNorm() / (2.0 * shear_stiffness_ * area);
   }
 
@@ -285,7 +356,7 @@ class BondedParticleModel final : public BondLaw {
     const double area = area_m2(g.bond_radius_m);
     const double normal_velocity = g.relative_velocity_m_per_s.dot(g.normal);
     const Vec3 tangential_velocity = g.relative_velocity_m_per_s - normal_velocity * g.normal;
-    state.normal_force_n = -normal_stiffness_ * area * (g.distance_m - g.rest_length_m);
+    state.normal_force_n = normal_.force_n(g, state, normal_stiffness_ * area, area);
     rotate_into_tangent_plane(state.shear_force_n, g.normal);
     state.shear_force_n -= shear_stiffness_ * area * g.timestep_s * tangential_velocity;
     const double shear_limit_n = shear_strength_ * area;
@@ -303,6 +374,114 @@ class BondedParticleModel final : public BondLaw {
   double normal_strength_;
   double shear_strength_;
   double disk_scale_;
+  Normal normal_;
+};
+
+// ---- effects (issue 6's effect library): off unless an interaction's chain names them
+
+// Rolling resistance, constant directional torque (EDEM's "type A"): a moment
+// -mu_r R* |load| omega_rel / |omega_rel| against the relative rolling, limited so that it can
+// stop the rolling within a step but not reverse it. A ball rolling on a plane decelerates at
+// 5/7 mu_r g. Needs a normal law before it in the chain.
+class RollingResistance final : public ContactLaw {
+ public:
+  RollingResistance(const LawParameters& parameters, const PairMaterial&)
+      : rolling_friction_(parameters.at("rolling_friction")) {}
+
+  void compute(const PairGeometry& g, PairState&, ForceAccumulator& f) const override {
+    if (!f.touching) return;
+    const Vec3& omega = g.relative_angular_velocity_rad_per_s;
+    const double speed = omega.norm();
+    if (speed == 0.0) return;
+    const double inertia = 0.4 * g.effective_mass_kg * g.effective_radius_m * g.effective_radius_m;
+    const double torque =
+        std::min(rolling_friction_ * g.effective_radius_m * std::abs(f.friction_normal_load_n),
+                 inertia * speed / g.timestep_s);
+    const Vec3 moment = -torque / speed * omega;
+    f.torque_on_i_nm += moment;
+    f.torque_on_j_nm -= moment;
+  }
+
+ private:
+  double rolling_friction_;
+};
+
+// Static against kinetic friction (replaces coulomb): a resting contact holds up to mu_s times
+// the load; once it slips the limit drops to mu_k until the contact points move slower than
+// stick_speed again. A block on an incline stays at rest below atan(mu_s) and, once sliding,
+// accelerates at g (sin theta - mu_k cos theta).
+class StaticKineticFriction final : public ContactLaw {
+ public:
+  StaticKineticFriction(const LawParameters& parameters, const PairMaterial&)
+      : static_(parameters.at("static_friction_coefficient")),
+        kinetic_(parameters.at("kinetic_friction_coefficient")),
+        stick_speed_(parameters.at("stick_speed_m_per_s")) {
+    if (kinetic_ > static_) {
+      throw std::invalid_argument(
+          "law 'static_kinetic_friction': kinetic_friction_coefficient above the static one");
+    }
+  }
+
+  void compute(const PairGeometry& g, PairState& state, ForceAccumulator& f) const override {
+    if (!f.touching) {
+      state.flags &= ~PairState::kFlagSliding;
+      return;
+    }
+    const double load = std::abs(f.friction_normal_load_n);
+    bool sliding = (state.flags & PairState::kFlagSliding) != 0U;
+    if (sliding) {
+      const Vec3 tangential_velocity =
+          g.relative_velocity_m_per_s - g.relative_velocity_m_per_s.dot(g.normal) * g.normal;
+      if (tangential_velocity.squaredNorm() < stick_speed_ * stick_speed_) sliding = false;
+    }
+    const double elastic_squared = f.tangential_elastic_force_n.squaredNorm();
+    const double limit = (sliding ? kinetic_ : static_) * load;
+    if (elastic_squared > limit * limit) sliding = true;
+    if (sliding) {
+      const double kinetic_limit = kinetic_ * load;
+      if (elastic_squared > kinetic_limit * kinetic_limit) {
+        const double scale = kinetic_limit / std::sqrt(elastic_squared);
+        f.tangential_elastic_force_n *= scale;
+        state.tangential_displacement_m *= scale;
+      }
+      f.tangential_damping_force_n.setZero();
+      state.flags |= PairState::kFlagSliding;
+    } else {
+      state.flags &= ~PairState::kFlagSliding;
+      if ((f.tangential_elastic_force_n + f.tangential_damping_force_n).squaredNorm() >
+          limit * limit) {
+        f.tangential_damping_force_n.setZero();
+      }
+    }
+  }
+
+ private:
+  double static_;
+  double kinetic_;
+  double stick_speed_;
+};
+
+// A wet film between the surfaces (thesis 6.3: water made the belt slip under the mailbox):
+// it lubricates, so the friction load is reduced by the factor (1 - lubrication), and its
+// meniscus pulls the surfaces together with the capillary force 2 pi R* gamma while they touch.
+// Place it after the normal laws and before the friction law.
+class WetFilm final : public ContactLaw {
+ public:
+  WetFilm(const LawParameters& parameters, const PairMaterial&)
+      : lubrication_(parameters.at("lubrication")),
+        surface_tension_(parameters.at("surface_tension_n_per_m")) {}
+
+  void compute(const PairGeometry& g, PairState&, ForceAccumulator& f) const override {
+    if (!f.touching) return;
+    const double capillary = 2.0 * kPi * g.effective_radius_m * surface_tension_;
+    f.normal_force_n -= capillary;
+    f.friction_normal_load_n =
+        (std::abs(f.friction_normal_load_n) + capillary) * (1.0 - lubrication_);
+  }
+
+ private:
+  double lubrication_;
+  double surface_tension_;
 };
 
 // Any chain, law by law.
@@ -507,14 +686,42 @@ void register_builtin_laws(LawRegistry& registry) {
                             "JKR adhesion from the work of adhesion",
                             {{"surface_energy_j_per_m2", "J/m^2", 0.0, 1e3, std::nullopt}},
                             make_contact_law<Jkr>});
-  registry.add_bond_law({"bpm",
-                         "bonded particle model, eqs. 3.4-3.5, no damping, no moments",
-                         {{"normal_stiffness_n_per_m3", "N/m^3", 1e-30, kHuge, std::nullopt},
-                          {"shear_stiffness_n_per_m3", "N/m^3", 1e-30, kHuge, std::nullopt},
-                          {"normal_strength_pa", "Pa", 0.0, kHuge, 1e300},
-                          {"shear_strength_pa", "Pa", 0.0, kHuge, 1e300},
-                          {"bonded_disk_scale", "-", 1e-6, 1e3, 1.0}},
-                         make_bond_law<BondedParticleModel>});
+  const std::vector<LawParameterInfo> bpm_parameters = {
+      {"normal_stiffness_n_per_m3", "N/m^3", 1e-30, kHuge, std::nullopt},
+      {"shear_stiffness_n_per_m3", "N/m^3", 1e-30, kHuge, std::nullopt},
+      {"normal_strength_pa", "Pa", 0.0, kHuge, 1e300},
+      {"shear_strength_pa", "Pa", 0.0, kHuge, 1e300},
+      {"bonded_disk_scale", "-", 1e-6, 1e3, 1.0}};
+  const auto with = [&](std::vector<LawParameterInfo> extra) {
+    extra.insert(extra.begin(), bpm_parameters.begin(), bpm_parameters.end());
+    return extra;
+  };
+  registry.add_bond_law({"bpm", "bonded particle model, eqs. 3.4-3.5, no damping, no moments",
+                         bpm_parameters, make_bond_law<BondedParticleModel<ElasticNormal>>});
+  // effects (off unless configured): see the classes for the physics
+  registry.add_bond_law(
+      {"bpm_viscoelastic", "bpm with a Maxwell arm in the normal direction (relaxation)",
+       with({{"relaxation_stiffness_n_per_m3", "N/m^3", 1e-30, kHuge, std::nullopt},
+             {"relaxation_time_s", "s", 1e-9, 1e9, std::nullopt}}),
+       make_bond_law<BondedParticleModel<MaxwellNormal>>});
+  registry.add_bond_law({"bpm_plastic", "bpm, perfectly plastic beyond a normal yield stress",
+                         with({{"normal_yield_strength_pa", "Pa", 1e-30, kHuge, std::nullopt}}),
+                         make_bond_law<BondedParticleModel<PlasticNormal>>});
+  registry.add_contact_law({"rolling_resistance",
+                            "constant directional rolling torque mu_r R* |load|",
+                            {{"rolling_friction", "-", 0.0, 10.0, std::nullopt}},
+                            make_contact_law<RollingResistance>});
+  registry.add_contact_law({"static_kinetic_friction",
+                            "friction limit mu_s at rest and mu_k while slipping",
+                            {{"static_friction_coefficient", "-", 0.0, 100.0, std::nullopt},
+                             {"kinetic_friction_coefficient", "-", 0.0, 100.0, std::nullopt},
+                             {"stick_speed_m_per_s", "m/s", 1e-9, 10.0, 1e-3}},
+                            make_contact_law<StaticKineticFriction>});
+  registry.add_contact_law({"wet_film",
+                            "lubricating wet film with capillary attraction",
+                            {{"lubrication", "-", 0.0, 1.0, std::nullopt},
+                             {"surface_tension_n_per_m", "N/m", 0.0, 1.0, 0.0}},
+                            make_contact_law<WetFilm>});
 }
 
 }  // namespace fl::dem

@@ -707,6 +707,7 @@ void Simulation::compute_forces() {
         g.normal = d / distance;
         g.overlap_m = radius_sum - distance;
         g.relative_velocity_m_per_s = vi - v[j] - (ri * wi + rj * w[j]).cross(g.normal);
+        g.relative_angular_velocity_rad_per_s = wi - w[j];
         g.effective_radius_m = ri * rj / radius_sum;
         g.effective_mass_kg = 1.0 / (inv_mi + inv_mass[j]);
         g.timestep_s = dt;
@@ -772,6 +773,7 @@ void Simulation::compute_forces() {
           g.normal = normal;
           g.overlap_m = overlap;
           g.relative_velocity_m_per_s = v[i] - (ri * w[i]).cross(normal) - wall_velocity;
+          g.relative_angular_velocity_rad_per_s = w[i] - ws.angular_velocity_rad_per_s;
           g.effective_radius_m = ri;
           g.effective_mass_kg = 1.0 / inv_mass[i];
           g.timestep_s = dt;

@@ -6,25 +6,28 @@
 // pair's material (E*, G*).
 //
 // Adding an effect (visco-elastic bonds, plasticity, moisture-dependent friction, rolling
-// resistance, graded stiffness) is one class and one registration line:
+// resistance, graded stiffness: the built-in ones are bpm_viscoelastic, bpm_plastic, wet_film,
+// rolling_resistance, static_kinetic_friction) is one class and one registration line:
 //
-//   class RollingResistance final : public ContactLaw {       // 1. the class
+//   class SpeedWeakening final : public ContactLaw {          // 1. the class
 //    public:
-//     RollingResistance(const LawParameters& p, const PairMaterial&)
-//         : mu_r_(p.at("rolling_friction")) {}
+//     SpeedWeakening(const LawParameters& p, const PairMaterial&)
+//         : drop_(p.at("friction_drop_per_m_per_s")) {}
 //     void compute(const PairGeometry& g, PairState&, ForceAccumulator& f) const override {
-//       if (g.overlap_m > 0.0) f.torque_on_i_nm += ...;  // -mu_r * Fn * R* * omega_rel/|omega_rel|
+//       if (f.touching) f.friction_normal_load_n /= 1.0 + drop_ *
+//       g.relative_velocity_m_per_s.norm();
 //     }
 //    private:
-//     double mu_r_;
+//     double drop_;
 //   };
 //   // 2. in register_builtin_laws() (twin/src/dem/laws.cpp):
-//   registry.add_contact_law({"rolling_resistance", "EPSD-1 rolling friction",
-//                             {{"rolling_friction", "-", 0.0, 1.0, std::nullopt}},
-//                             make_contact_law<RollingResistance>});
+//   registry.add_contact_law({"speed_weakening", "friction falling with sliding speed",
+//                             {{"friction_drop_per_m_per_s", "s/m", 0.0, 100.0, std::nullopt}},
+//                             make_contact_law<SpeedWeakening>});
 //
-// The YAML reader (config.hpp) then accepts `rolling_resistance: {rolling_friction: 0.01}` in an
-// interaction's contact chain with strict range checks taken from the parameter list.
+// The YAML reader (config.hpp) then accepts `speed_weakening: {friction_drop_per_m_per_s: 2}`
+// in an interaction's contact chain (before coulomb) with strict range checks taken from the
+// parameter list.
 //
 // Units are SI (m, kg, s, N); names carry units where not obvious.
 #pragma once
@@ -58,9 +61,10 @@ struct PairMaterial {
 struct PairGeometry {
   Vec3 normal = Vec3::UnitZ();  // unit, from j (or the wall) towards i
   double overlap_m = 0.0;       // r_i + r_j - distance (sphere-wall: r_i - distance); < 0: gap
-  Vec3 relative_velocity_m_per_s = Vec3::Zero();  // i's contact point relative to j's
-  double effective_radius_m = 0.0;                // R* = r_i r_j / (r_i + r_j); r_i for a wall
-  double effective_mass_kg = 0.0;                 // m* = m_i m_j / (m_i + m_j); m_i for a wall
+  Vec3 relative_velocity_m_per_s = Vec3::Zero();            // i's contact point relative to j's
+  Vec3 relative_angular_velocity_rad_per_s = Vec3::Zero();  // omega_i - omega_j (wall: 0)
+  double effective_radius_m = 0.0;  // R* = r_i r_j / (r_i + r_j); r_i for a wall
+  double effective_mass_kg = 0.0;   // m* = m_i m_j / (m_i + m_j); m_i for a wall
   double timestep_s = 0.0;
 };
 
@@ -72,6 +76,7 @@ struct PairState {
   std::uint32_t flags = 0;                        // bit flags owned by laws (see kFlag*)
 
   static constexpr std::uint32_t kFlagAdhesiveNeck = 1U;  // jkr: neck formed, survives a gap
+  static constexpr std::uint32_t kFlagSliding = 2U;       // static_kinetic_friction: kinetic phase
   void reset() { *this = PairState{}; }
   [[nodiscard]] bool active() const { return flags != 0 || !tangential_displacement_m.isZero(0.0); }
 };
