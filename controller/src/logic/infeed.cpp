@@ -102,7 +102,6 @@ void TaktStation::update(const ScanContext& ctx, OutputImage& out) {
   since_stroke_s_ += ctx.dt_s;
   beam_stable_s_ = ctx.in.takt_beam_broken ? beam_stable_s_ + ctx.dt_s : 0.0F;
   beam_clear_s_ = ctx.in.takt_beam_broken ? 0.0F : beam_clear_s_ + ctx.dt_s;
-  if (beam_clear_s_ >= takt.beam_debounce_s) armed_ = true;
   if (!ctx.infeed_enabled) {
     // A stroke in progress finishes, so that the item it created leaves the takt belt
     // instead of waiting on it, tracked, until the next start.
@@ -118,11 +117,22 @@ void TaktStation::update(const ScanContext& ctx, OutputImage& out) {
     return;
   }
   const bool beam = beam_stable_s_ >= takt.beam_debounce_s;
+  const bool beam_clear = beam_clear_s_ >= takt.beam_debounce_s;
 
   if (phase_ == Phase::kPull) {
     pulled_mm_ += ctx.tracker.travel_mm(DriveId::kTakt);
     if (pulled_mm_ >= takt.pull_distance_mm) phase_ = Phase::kIndex;
   }
+  // Only a clear beam after the pull re-arms: the row held at the barrier can sit a few mm
+  // short of the beam when the stroke starts (a soft fillet settling as the belt stops, a
+  // thin tip under the beam), so the beam may be clear at the start of a pull and then be
+  // broken by the very fillet being pulled; arming on that would take its body for the
+  // next row and create an item for a fillet that is not at the barrier.
+  if (phase_ == Phase::kIndex && beam_clear) armed_ = true;
+  // A row that left the beam while held (settled back, or the previous fillet's tail that
+  // the transition belt pulled away) is not at the barrier: creep on at standard speed
+  // until something breaks the beam again, rather than stroke at a clear beam.
+  if (phase_ == Phase::kWaitGap && beam_clear) phase_ = Phase::kIndex;
   if (phase_ == Phase::kIndex && beam && armed_) phase_ = Phase::kWaitGap;
   if (phase_ == Phase::kWaitGap && gap_clear(ctx)) {
     // The front of the row is at the barrier; its centre half a length behind.

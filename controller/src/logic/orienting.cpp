@@ -189,12 +189,28 @@ void CentringStation::update(const ScanContext& ctx, OutputImage& out) {
   constexpr float kStrokeWindowMm = 20.0F;
   // The pusher pre-positions for an item this far ahead of the unit.
   constexpr float kApproachMm = 150.0F;
+  // A stroke that started in the window is held until the pusher reports the commanded
+  // shift (or the item is this far past the unit): a real pusher needs its stroke time and
+  // more when it brakes gently enough not to throw the fillet, longer than the item takes
+  // through the window (40 mm, 80 ms at 0.5 m/s, against 0.12 s for a full stroke).
+  constexpr float kStrokeHoldMm = 150.0F;
+  // The pusher is at the commanded shift within this (its positioning, and float rounding).
+  constexpr float kPusherArrivedMm = 1.0F;
   out.centring_stroke = false;
   out.centring_shift_mm = 0.0F;
+  bool holding = false;  // a stroke in progress wins over pre-positioning for the next item
+  float held_shift_mm = 0.0F;
   for (Item& item : ctx.tracker.items()) {
     if (!item.active || item.centring_done) continue;
     if (item.s_mm < centring.s_mm - kApproachMm) continue;
     if (item.s_mm > centring.s_mm + kStrokeWindowMm) {
+      const bool arrived =
+          std::fabs(ctx.in.centring_position_mm - item.centring_shift_mm) < kPusherArrivedMm;
+      if (item.centring_shift_mm != 0.0F && !arrived && item.s_mm < centring.s_mm + kStrokeHoldMm) {
+        holding = true;
+        held_shift_mm = item.centring_shift_mm;
+        continue;
+      }
       item.centring_done = true;
       item.y_mm += item.centring_shift_mm;
       continue;
@@ -207,6 +223,10 @@ void CentringStation::update(const ScanContext& ctx, OutputImage& out) {
     item.centring_shift_mm = shift_mm;
     out.centring_shift_mm = shift_mm;
     out.centring_stroke = shift_mm != 0.0F && item.s_mm >= centring.s_mm - kStrokeWindowMm;
+  }
+  if (holding) {
+    out.centring_shift_mm = held_shift_mm;
+    out.centring_stroke = true;
   }
 }
 

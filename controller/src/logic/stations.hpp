@@ -69,7 +69,8 @@ class TaktStation {
   float beam_stable_s_ = 0.0F;
   float beam_clear_s_ = 0.0F;
   // A stroke needs the beam to have been clear since the last one: the pulled fillet's
-  // tail keeps the beam broken for a while, and must not count as the next row.
+  // tail keeps the beam broken for a while, and must not count as the next row. Only a
+  // clear beam after the pull counts (the pulled fillet may reach the beam during it).
   bool armed_ = true;
   float since_stroke_s_ = 1e9F;
   float pulled_mm_ = 0.0F;

@@ -130,6 +130,64 @@ TEST_F(TaktTest, BeamThatNeverClearsCountsOnce) {
   EXPECT_EQ(h.tracker.active_count(), 1U);
 }
 
+// Seen in the DEM twin: the held row settles a few mm back as the takt belt stops, so the
+// beam is clear when the stroke starts, and the pulled fillet breaks it again during the
+// pull. That clear beam is not the gap behind the pulled fillet: its body over the beam
+// after the pull must not start a second stroke (which created an item for the fillet
+// behind, still 75 mm short of the barrier, and later a ghost at camera 1).
+TEST_F(TaktTest, BeamClearAtTheStartOfThePullDoesNotArmTheNextStroke) {
+  TaktStation station(h.config);
+  h.tracker.advance(h.in);
+  h.in.takt_beam_broken = true;
+  for (int i = 0; i < 3; ++i) scan(station, 0.0F);
+  ASSERT_EQ(h.tracker.active_count(), 1U);
+  ASSERT_EQ(station.phase(), TaktStation::Phase::kPull);
+  h.in.takt_beam_broken = false;                    // settled 5 mm back off the beam
+  for (int i = 0; i < 4; ++i) scan(station, 5.0F);  // 40 ms clear: twice the debounce
+  h.in.takt_beam_broken = true;                     // the pulled fillet reaches the beam
+  // The rest of the pull, then 2 s with its body over the beam (a slow crossing): well past
+  // the minimum period, with the gap never the limit.
+  for (int i = 0; i < 200; ++i) {
+    scan(station, 5.0F);
+    if (h.tracker.items()[0].active) h.tracker.items()[0].s_mm = h.config.takt.min_gap_mm + 1.0F;
+  }
+  EXPECT_EQ(h.tracker.active_count(), 1U);
+  // Its tail leaves the beam, the next row arrives: the next stroke goes.
+  h.in.takt_beam_broken = false;
+  for (int i = 0; i < 3; ++i) scan(station, 1.0F);
+  h.in.takt_beam_broken = true;
+  for (int i = 0; i < 3; ++i) scan(station, 0.0F);
+  EXPECT_EQ(h.tracker.active_count(), 2U);
+}
+
+// A row held at the barrier that comes off the beam (settling back, or the beam was broken
+// by the previous fillet's tail that the transition belt then pulled away) is not struck at
+// a clear beam: the takt creeps on at standard speed until the beam breaks again.
+TEST_F(TaktTest, HeldRowThatLeavesTheBeamIsNotStruck) {
+  TaktStation station(h.config);
+  h.tracker.advance(h.in);
+  h.in.takt_beam_broken = true;
+  for (int i = 0; i < 3; ++i) scan(station, 0.0F);
+  scan(station, h.config.takt.pull_distance_mm);
+  h.in.takt_beam_broken = false;
+  for (int i = 0; i < 3; ++i) scan(station, 1.0F);
+  h.in.takt_beam_broken = true;
+  for (int i = 0; i < 3; ++i) scan(station, 0.0F);
+  ASSERT_EQ(station.phase(), TaktStation::Phase::kWaitGap);  // held: minimum period
+  h.in.takt_beam_broken = false;
+  const int period_scans = static_cast<int>(h.config.takt.min_period_s / 0.01F) + 1;
+  for (int i = 0; i < period_scans; ++i) {
+    scan(station, 0.0F);
+    h.tracker.items()[0].s_mm = h.config.takt.min_gap_mm + 1.0F;
+  }
+  EXPECT_EQ(station.phase(), TaktStation::Phase::kIndex);
+  EXPECT_FLOAT_EQ(h.out.drives[index(DriveId::kTakt)].speed_mps, h.config.takt.standard_speed_mps);
+  EXPECT_EQ(h.tracker.active_count(), 1U);
+  h.in.takt_beam_broken = true;  // the row is at the barrier again: struck at once
+  for (int i = 0; i < 3; ++i) scan(station, 0.0F);
+  EXPECT_EQ(h.tracker.active_count(), 2U);
+}
+
 // A stop during a stroke lets the stroke finish: the item it created must leave the takt.
 TEST_F(TaktTest, StrokeInProgressFinishesWhenTheInfeedStops) {
   TaktStation station(h.config);

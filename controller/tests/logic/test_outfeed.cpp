@@ -182,10 +182,56 @@ TEST(Centring, StrokeShiftsTheMeasuredOffsetToTheCentre) {
   item->s_mm = h.config.centring.s_mm;
   station.update(h.context(), h.out);
   EXPECT_TRUE(h.out.centring_stroke);
+  h.in.centring_position_mm = -25.0F;  // the pusher reports the stroke done
   item->s_mm = h.config.centring.s_mm + 21.0F;
   station.update(h.context(), h.out);
   EXPECT_TRUE(item->centring_done);
   EXPECT_FLOAT_EQ(item->y_mm, 0.0F);
+}
+
+// The item crosses the 40 mm stroke window in 80 ms at 0.5 m/s; a 50 mm stroke takes the
+// pusher 0.1 s at its top speed (0.12 s for 60 mm) and longer on a profile gentle enough
+// not to throw the fillet (the DEM twin: 0.21 s). Dropping the stroke when the item left
+// the window retracted the plate mid-stroke at full speed, and the fillet slid on to 40 mm
+// on the other side. The stroke is held until the pusher reports the shift.
+TEST(Centring, StrokeIsHeldUntilThePusherReportsTheShift) {
+  test::Harness h;
+  CentringStation station(h.config);
+  Item* item = h.tracker.create(0, h.config.centring.s_mm, false);
+  FilletEstimate estimate = test::good_estimate(Hand::kLeft, SideUp::kBone, 0.0F);
+  estimate.y_mm = 50.0F;
+  item->evidence[index(CameraId::kPosition)].add(estimate);
+  station.update(h.context(), h.out);
+  ASSERT_TRUE(h.out.centring_stroke);
+  h.in.centring_position_mm = -40.0F;  // 80 ms at 0.5 m/s: 40 of the 50 mm
+  item->s_mm = h.config.centring.s_mm + 40.0F;
+  station.update(h.context(), h.out);
+  EXPECT_TRUE(h.out.centring_stroke);
+  EXPECT_FLOAT_EQ(h.out.centring_shift_mm, -50.0F);
+  EXPECT_FALSE(item->centring_done);
+  h.in.centring_position_mm = -50.0F;
+  item->s_mm = h.config.centring.s_mm + 50.0F;
+  station.update(h.context(), h.out);
+  EXPECT_FALSE(h.out.centring_stroke);
+  EXPECT_TRUE(item->centring_done);
+  EXPECT_FLOAT_EQ(item->y_mm, 0.0F);
+}
+
+// A pusher that never arrives (jammed, or the item was not there) does not hold the unit
+// for the next item: the stroke ends 150 mm past the unit, 350 mm before the next item at
+// the nominal 500 mm spacing reaches the approach zone.
+TEST(Centring, HeldStrokeEndsWhenTheItemIsWellPastTheUnit) {
+  test::Harness h;
+  CentringStation station(h.config);
+  Item* item = h.tracker.create(0, h.config.centring.s_mm, false);
+  FilletEstimate estimate = test::good_estimate(Hand::kLeft, SideUp::kBone, 0.0F);
+  estimate.y_mm = 50.0F;
+  item->evidence[index(CameraId::kPosition)].add(estimate);
+  station.update(h.context(), h.out);
+  item->s_mm = h.config.centring.s_mm + 151.0F;
+  station.update(h.context(), h.out);
+  EXPECT_FALSE(h.out.centring_stroke);
+  EXPECT_TRUE(item->centring_done);
 }
 
 }  // namespace

@@ -53,6 +53,7 @@ DemPlantConfig load_dem_plant_config(const std::filesystem::path& file) {
       m.pusher_half_length_mm = map.read_float("pusher_half_length_mm", Range::positive());
       m.pusher_height_mm = map.read_float("pusher_height_mm", Range::positive());
       m.pusher_window_half_mm = map.read_float("pusher_window_half_mm", Range::positive());
+      m.pusher_accel_mps2 = map.read_float("pusher_accel_mps2", Range::positive());
       m.roller_radius_mm = map.read_float("roller_radius_mm", Range::positive());
       m.roller_up_gap_mm = map.read_float("roller_up_gap_mm", Range::positive());
       m.roller_down_gap_mm = map.read_float("roller_down_gap_mm", Range::non_negative());

@@ -17,7 +17,10 @@
 //   heading, as in the fast plant.
 // - Reject belt: reverses on command; the crate is a removal zone under its upstream edge.
 // - Centring pusher: a vertical plate; a stroke starts at the edge of the fillet at the unit
-//   (the real unit's light grid) and travels the commanded shift, pushing by contact.
+//   (the real unit's light grid) and travels the commanded shift, pushing by contact, on a
+//   trapezoidal profile whose braking stays under the friction that stops the fillet on the
+//   belt (else the plate stops and the fillet slides on). Its face runs with the centring
+//   belt (a belt-faced pusher), so it shifts without braking one side and turning the fillet.
 // - Squeeze roller: a cylinder mesh lowered onto the squeeze belt, rolling with it.
 // - Air knife: a removal zone around its position while it blows.
 // - Feeder (simplification of hopper, bulk belt and leveller): the hopper outflow fills a
@@ -154,6 +157,7 @@ class DemPlant final : public Plant {
     double plate1_travel = 0.0;
     double plate2_travel = 0.0;
     double pusher_mm = 0.0;
+    double pusher_speed_mmps = 0.0;
     int pusher_side = 0;  // +1 pushes from the left (towards -y), -1 from the right, 0 parked
     double pusher_edge_m = 0.0;  // fillet edge where the stroke began
     double roller_travel = 0.0;

@@ -49,6 +49,10 @@ struct DemMachineryConfig {
   float pusher_half_length_mm = 100.0F;
   float pusher_height_mm = 60.0F;
   float pusher_window_half_mm = 60.0F;  // the fillet it strokes against, around the unit
+  // Acceleration and braking of the pusher (its top speed is max shift / stroke time). Under
+  // mu g of the fillet on the belt (0.5 x 9.81 = 4.9 m/s^2, config/dem.yaml), so that the
+  // fillet stops with the plate instead of sliding on: the real unit's servo profile.
+  float pusher_accel_mps2 = 4.0F;
   // Squeeze roller: a cylinder across the belt; bottom this high above the belt when up / down.
   float roller_radius_mm = 40.0F;
   float roller_up_gap_mm = 80.0F;
