@@ -4,6 +4,8 @@
 //   linectl config check FILE       validate a line configuration
 //   linectl record / replay         camera recordings and their regression replay
 //   (record_replay.hpp)
+//   linectl twin serve / control    the twin and the controller as two processes over DDS
+//   (two_process.hpp)
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
@@ -18,6 +20,7 @@
 #include <numbers>
 #include <thread>
 
+#include "dem_output.hpp"
 #include "duration.hpp"
 #include "fl/apps/closed_loop.hpp"
 #include "fl/controller/config_loader.hpp"
@@ -29,6 +32,7 @@
 #include "fl/twin/fast_plant_config.hpp"
 #include "plant_io.hpp"
 #include "record_replay.hpp"
+#include "two_process.hpp"
 
 namespace fl::apps {
 namespace {
@@ -55,6 +59,9 @@ struct RunArgs {
   int fifo_priority = 0;
   bool lock_memory = false;
   bool quiet = false;
+  std::string vtk_directory;  // --plant dem: ParaView series
+  std::string video_file;     // --plant dem: top and side view video
+  double frame_every_s = 0.04;
 };
 
 std::unique_ptr<Plant> make_plant(const RunArgs& args, const LineConfig& line) {
@@ -233,7 +240,21 @@ int run_command(const RunArgs& args) {
     options.progress = [&](double done, double total) { progress(done, total); };
     options.on_event = log_event;
     options.on_record = [&](const FilletRecord& record) { ledger.write(record); };
+    std::unique_ptr<DemRunOutput> output;
+    if (!args.vtk_directory.empty() || !args.video_file.empty()) {
+      const auto* dem = dynamic_cast<const DemPlant*>(plant.get());
+      if (dem == nullptr) {
+        spdlog::error("--vtk and --video need --plant dem");
+        return 2;
+      }
+      output = std::make_unique<DemRunOutput>(*dem, args.vtk_directory, args.video_file,
+                                              args.frame_every_s, line.placed_at_s_mm * 1e-3);
+      options.before_scan = [&](std::int64_t time_ns, LineController&) {
+        output->on_scan(time_ns);
+      };
+    }
     kpis = run_closed_loop(line, *plant, options);
+    if (output) spdlog::info("{} frames written", output->frames());
   }
   progress.finish();
   std::fputs(format_kpis(kpis).c_str(), stdout);
@@ -278,6 +299,13 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 99));
   run->add_flag("--mlock", run_args.lock_memory, "lock memory for --realtime (mlockall)");
   run->add_flag("--quiet", run_args.quiet, "no progress display");
+  run->add_option("--vtk", run_args.vtk_directory,
+                  "--plant dem: write a ParaView series (particles, walls) to this folder");
+  run->add_option("--video", run_args.video_file,
+                  "--plant dem: write a top and side view video (.mkv lossless, .avi MJPG)");
+  run->add_option("--frame-every", run_args.frame_every_s,
+                  "seconds of line time between --vtk/--video frames")
+      ->check(CLI::Range(1e-3, 10.0));
 
   std::string check_path;
   CLI::App* config = app.add_subcommand("config", "configuration tools");
@@ -289,6 +317,10 @@ int main(int argc, char** argv) {
   CLI::App* record = add_record_subcommand(app, record_args);
   ReplayArgs replay_args;
   CLI::App* replay = add_replay_subcommand(app, replay_args);
+  TwinServeArgs twin_args;
+  CLI::App* twin_serve = add_twin_subcommand(app, twin_args);
+  ControlArgs control_args;
+  CLI::App* control = add_control_subcommand(app, control_args);
 
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
@@ -298,6 +330,8 @@ int main(int argc, char** argv) {
     if (run->parsed()) return run_command(run_args);
     if (record->parsed()) return record_command(record_args);
     if (replay->parsed()) return replay_command(replay_args);
+    if (twin_serve->parsed()) return twin_serve_command(twin_args);
+    if (control->parsed()) return control_command(control_args);
     if (check->parsed()) {
       fl::load_line_config(check_path);
       spdlog::info("{}: valid", check_path);

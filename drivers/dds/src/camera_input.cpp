@@ -69,7 +69,19 @@ void DdsCameraInput::read(InputImage& in) noexcept {
   for (std::size_t c = 0; c < kCameraCount; ++c) {
     CameraSlot& slot = slots_[c];
     slot.frames.update();
-    in.cameras[c] = slot.frames.front();
+    in.cameras[c] = slot.frames.front().frame;
+  }
+}
+
+void DdsCameraInput::read(InputImage& in, FrameStamps& stamps) noexcept {
+  stamps.fresh_mask = 0;
+  for (std::size_t c = 0; c < kCameraCount; ++c) {
+    CameraSlot& slot = slots_[c];
+    if (slot.frames.update()) stamps.fresh_mask |= 1U << c;
+    const StampedFrame& front = slot.frames.front();
+    in.cameras[c] = front.frame;
+    stamps.source_ns[c] = front.source_ns;
+    stamps.arrival_ns[c] = front.arrival_ns;
   }
 }
 
@@ -146,7 +158,10 @@ void DdsCameraInput::take_all(dds_entity_t reader) {
 
 void DdsCameraInput::accept(const fl_CameraEstimates& sample, const dds_sample_info_t& info) {
   CameraSlot& slot = slots_[sample.camera_id];
-  from_idl(sample, slot.frames.back());
+  StampedFrame& stamped = slot.frames.back();
+  from_idl(sample, stamped.frame);
+  stamped.source_ns = info.source_timestamp;
+  stamped.arrival_ns = dds_time();
   slot.frames.publish();
   slot.instance.store(info.instance_handle, std::memory_order_relaxed);
   slot.publication.store(info.publication_handle, std::memory_order_relaxed);

@@ -166,4 +166,46 @@ bool from_idl(const fl_DriveFeedback& sample, DriveId& drive, DriveFeedback& fee
 
 fl_LineState to_idl(LineState state) noexcept { return static_cast<fl_LineState>(state); }
 
+void to_idl(std::uint64_t scan, const InputImage& in, fl_LineSensors& sample) noexcept {
+  std::memset(&sample, 0, sizeof sample);
+  sample.time_ns = in.time_ns;
+  sample.scan = scan;
+  sample.takt_beam_broken = in.takt_beam_broken;
+  sample.level_mm = in.level_mm;
+  sample.hopper_opening_mm = in.hopper_opening_mm;
+  sample.leveller_speed_rpm = in.leveller_speed_rpm;
+  sample.leveller_overload = in.leveller_overload;
+  sample.flip_plate1_flipping = in.flip_plate1_flipping;
+  sample.flip_plate2_flipping = in.flip_plate2_flipping;
+  sample.centring_position_mm = in.centring_position_mm;
+  sample.squeeze_roller_down = in.squeeze_roller_down;
+  sample.estop_ok = in.estop_ok;
+  sample.start_request = in.start_request;
+  sample.stop_request = in.stop_request;
+  sample.fault_reset_request = in.fault_reset_request;
+}
+
+bool from_idl(const fl_LineSensors& sample, InputImage& in) noexcept {
+  // A corrupt analogue value would drive the level regulation or the centring unit: refuse
+  // the whole sample, as for estimates.
+  for (const float value : {sample.level_mm, sample.hopper_opening_mm, sample.leveller_speed_rpm,
+                            sample.centring_position_mm}) {
+    if (!std::isfinite(value)) return false;
+  }
+  in.takt_beam_broken = sample.takt_beam_broken;
+  in.level_mm = sample.level_mm;
+  in.hopper_opening_mm = sample.hopper_opening_mm;
+  in.leveller_speed_rpm = sample.leveller_speed_rpm;
+  in.leveller_overload = sample.leveller_overload;
+  in.flip_plate1_flipping = sample.flip_plate1_flipping;
+  in.flip_plate2_flipping = sample.flip_plate2_flipping;
+  in.centring_position_mm = sample.centring_position_mm;
+  in.squeeze_roller_down = sample.squeeze_roller_down;
+  in.estop_ok = sample.estop_ok;
+  in.start_request = sample.start_request;
+  in.stop_request = sample.stop_request;
+  in.fault_reset_request = sample.fault_reset_request;
+  return true;
+}
+
 }  // namespace fl::drivers::dds

@@ -45,10 +45,16 @@ DdsLineOutput::~DdsLineOutput() {
 }
 
 void DdsLineOutput::write(std::int64_t scan_time_ns, const OutputImage& out) noexcept {
+  write(scan_time_ns, out, FrameStamps{});
+}
+
+void DdsLineOutput::write(std::int64_t scan_time_ns, const OutputImage& out,
+                          const FrameStamps& stamps) noexcept {
   Snapshot& snapshot = snapshots_.back();
   snapshot.time_ns = scan_time_ns;
   snapshot.scan = ++scan_;
   snapshot.out = out;
+  snapshot.frames = stamps;
   snapshots_.publish();
   scans_.store(scan_, std::memory_order_relaxed);
   // One system call that never blocks (EFD_NONBLOCK; the counter cannot overflow at one
@@ -94,9 +100,26 @@ void DdsLineOutput::publisher_main() {
         }
       } else {
         commands_published_.fetch_add(1, std::memory_order_relaxed);
+        record_latency(snapshot.frames);
       }
     }
     if (last_published_scan_ > 0) publish_status(snapshots_.front());
+  }
+}
+
+ReactionLatency DdsLineOutput::reaction_latency() const {
+  const std::lock_guard lock(latency_mutex_);
+  return {transport_latency_.summary(), reaction_latency_.summary()};
+}
+
+void DdsLineOutput::record_latency(const FrameStamps& frames) {
+  if (frames.fresh_mask == 0) return;
+  const std::int64_t now_ns = dds_time();
+  const std::lock_guard lock(latency_mutex_);
+  for (std::size_t c = 0; c < kCameraCount; ++c) {
+    if ((frames.fresh_mask & (1U << c)) == 0 || frames.source_ns[c] <= 0) continue;
+    transport_latency_.record(frames.arrival_ns[c] - frames.source_ns[c]);
+    reaction_latency_.record(now_ns - frames.source_ns[c]);
   }
 }
 

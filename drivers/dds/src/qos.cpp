@@ -33,6 +33,8 @@ Qos command_qos(std::int64_t scan_period_ns) {
   return qos;
 }
 
+Qos sensors_qos(std::int64_t scan_period_ns) { return command_qos(scan_period_ns); }
+
 Qos status_qos() {
   Qos qos = make_qos();
   dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));

@@ -90,7 +90,6 @@ std::string calibration_attachment(CameraId camera) {
 }
 
 std::string_view fillet_line_idl() { return kFilletLineIdl; }
-std::string_view line_recording_idl() { return kLineRecordingIdl; }
 std::string_view compressed_image_msg() { return kCompressedImageMsg; }
 
 // ------------------------------------------------------------------ writer
@@ -120,8 +119,6 @@ std::uint16_t RecordingWriter::schema(std::string_view name) {
   std::uint16_t id = 0;
   if (name == kCompressedImageSchema) {
     id = writer_->add_schema(std::string(name), "ros2msg", view(kCompressedImageMsg));
-  } else if (name == kLineSensorsSchema) {
-    id = writer_->add_schema(std::string(name), "omgidl", view(line_recording_idl()));
   } else {
     id = writer_->add_schema(std::string(name), "omgidl", view(fillet_line_idl()));
   }

@@ -11,7 +11,6 @@
 
 #include "fillet_line.h"
 #include "fl/vision/record/cdr.hpp"
-#include "line_recording.h"
 
 namespace fl::vision::record {
 namespace {

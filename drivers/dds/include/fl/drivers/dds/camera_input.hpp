@@ -49,6 +49,15 @@ struct CameraHealth {
   std::uint64_t writers_lost = 0;      // times the instance lost its last live writer
 };
 
+// When the frames that read() hands over were published and received, for latency
+// measurements (two-process mode: camera frame published -> command that reacts to it). On
+// Cyclone's clock (dds_time(): CLOCK_REALTIME), which a writer and a reader on one host share.
+struct FrameStamps {
+  std::uint32_t fresh_mask = 0;  // bit c: camera c's frame arrived since the previous read()
+  std::array<std::int64_t, kCameraCount> source_ns{};   // the writer's dds_write
+  std::array<std::int64_t, kCameraCount> arrival_ns{};  // taken by the listener
+};
+
 struct IntakeCounters {
   std::uint64_t samples_taken = 0;  // valid samples, accepted or not
   std::uint64_t samples_accepted = 0;
@@ -68,6 +77,8 @@ class DdsCameraInput {
 
   // Scan thread, real-time: copies every camera's newest frame into in.cameras.
   void read(InputImage& in) noexcept;
+  // The same, and when each frame was published and taken.
+  void read(InputImage& in, FrameStamps& stamps) noexcept;
 
   // Any thread.
   [[nodiscard]] CameraHealth health(CameraId camera) const noexcept;
@@ -80,8 +91,13 @@ class DdsCameraInput {
   static constexpr std::size_t kTakeBatch = 16;  // two frames of every camera per take
 
  private:
+  struct StampedFrame {
+    CameraFrame frame;
+    std::int64_t source_ns = 0;
+    std::int64_t arrival_ns = 0;
+  };
   struct CameraSlot {
-    TripleBuffer<CameraFrame> frames;
+    TripleBuffer<StampedFrame> frames;
     std::atomic<bool> delivered{false};
     std::atomic<bool> writer_alive{false};
     std::atomic<bool> deadline_missed{false};

@@ -50,4 +50,10 @@ bool from_idl(const fl_DriveFeedback& sample, DriveId& drive, DriveFeedback& fee
 
 fl_LineState to_idl(LineState state) noexcept;
 
+// The sensor part of the input image (everything besides time, drives and cameras).
+void to_idl(std::uint64_t scan, const InputImage& in, fl_LineSensors& sample) noexcept;
+// Fills only the sensor members of `in`; time, drives and cameras are left as they are.
+// Returns false (and leaves `in` alone) when an analogue value is NaN or infinite.
+bool from_idl(const fl_LineSensors& sample, InputImage& in) noexcept;
+
 }  // namespace fl::drivers::dds

@@ -6,10 +6,13 @@
 
 #include <atomic>
 #include <cstdint>
+#include <mutex>
 #include <thread>
 
 #include "fillet_line.h"
+#include "fl/controller/cycle_stats.hpp"
 #include "fl/controller/process_image.hpp"
+#include "fl/drivers/dds/camera_input.hpp"
 #include "fl/drivers/dds/entity.hpp"
 #include "fl/drivers/dds/qos.hpp"
 #include "fl/drivers/dds/triple_buffer.hpp"
@@ -21,6 +24,14 @@ struct LineOutputOptions {
   // LineStatus goes out on every change of state or faults, and at least this often so an
   // HMI sees the counters move: ten times a second.
   std::int64_t status_period_ns = 100'000'000;
+};
+
+// Latency of the frames the commands reacted to (write() with FrameStamps), on Cyclone's
+// clock: a camera node on the same host shares it.
+struct ReactionLatency {
+  DistributionSummary transport;  // frame published -> taken by the controller's listener
+  DistributionSummary reaction;   // frame published -> dds_write of the first command whose
+                                  // scan read it returned
 };
 
 struct LineOutputCounters {
@@ -40,6 +51,10 @@ class DdsLineOutput {
 
   // Scan thread, real-time. scan_time_ns: the scan's scheduled time (ProcessIo::read's now_ns).
   void write(std::int64_t scan_time_ns, const OutputImage& out) noexcept;
+  // The same, for a scan that read the frames in `stamps` (fresh_mask): the publisher thread
+  // measures their latency to this command's dds_write (reaction_latency()). A command
+  // superseded before it was published takes its frames' measurement with it.
+  void write(std::int64_t scan_time_ns, const OutputImage& out, const FrameStamps& stamps) noexcept;
 
   // Any thread: DDS-side facts the status carries (e.g. DdsCameraInput::stale_mask()).
   void set_camera_stale_mask(std::uint32_t mask) noexcept {
@@ -50,6 +65,7 @@ class DdsLineOutput {
   }
 
   [[nodiscard]] LineOutputCounters counters() const noexcept;
+  [[nodiscard]] ReactionLatency reaction_latency() const;
   [[nodiscard]] std::uint32_t command_readers() const { return command_writer_.matched_readers(); }
 
  private:
@@ -57,9 +73,11 @@ class DdsLineOutput {
     std::int64_t time_ns = 0;
     std::uint64_t scan = 0;
     OutputImage out{};
+    FrameStamps frames{};  // fresh_mask 0: no frame to measure
   };
   void publisher_main();
   void publish_status(const Snapshot& snapshot);
+  void record_latency(const FrameStamps& frames);
 
   const LineOutputOptions options_;
   Topic command_topic_;
@@ -88,6 +106,11 @@ class DdsLineOutput {
   std::int64_t last_status_ns_ = 0;
   fl_LineCommand command_sample_{};
   fl_LineStatus status_sample_{};
+  // 10 us bins to 200 ms: a reaction takes up to a scan period plus transport, and anything
+  // beyond 200 ms lands in the overflow bin (reported as the maximum).
+  mutable std::mutex latency_mutex_;  // publisher thread and readers; never the scan thread
+  DurationHistogram transport_latency_{10'000, 200'000'000};
+  DurationHistogram reaction_latency_{10'000, 200'000'000};
 
   std::thread thread_;  // last: starts when everything above exists
 };

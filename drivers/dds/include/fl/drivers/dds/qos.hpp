@@ -14,6 +14,7 @@ inline constexpr const char* kEstimatesTopic = "fl/camera/estimates";
 inline constexpr const char* kCommandTopic = "fl/line/command";
 inline constexpr const char* kStatusTopic = "fl/line/status";
 inline constexpr const char* kFeedbackTopic = "fl/drive/feedback";
+inline constexpr const char* kSensorsTopic = "fl/line/sensors";
 
 // A silent camera is noticed after this many of its frame periods: one lost frame is
 // normal jitter, three in a row is a camera that stopped (and still well inside the
@@ -39,6 +40,11 @@ Qos command_qos(std::int64_t scan_period_ns = kScanPeriodNs);
 // Status: reliable keep-last 1, transient-local: a late subscriber (HMI) gets the current
 // state at once.
 Qos status_qos();
+// Sensors (the line's I/O to the controller, one sample per scan): the same shape as commands
+// and for the same reasons: reliable keep-last 1 (a lost sample is repaired while it is the
+// newest), deadline kCommandDeadlineScans scans and a kCommandLeaseScans-scan lease so that
+// the controller can tell a silent I/O side from a quiet one.
+Qos sensors_qos(std::int64_t scan_period_ns = kScanPeriodNs);
 // Drive feedback telemetry: best-effort keep-last 1 per drive; the next sample supersedes.
 Qos feedback_qos();
 

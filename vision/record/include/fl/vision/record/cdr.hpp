@@ -1,6 +1,6 @@
 // A small CDR encoder and decoder for the fixed types that recordings carry: the DDS types of
-// drivers/dds/idl/fillet_line.idl (CameraEstimates, LineCommand, LineStatus, DriveFeedback),
-// the recording's own LineSensors (vision/record/idl/line_recording.idl), and the ROS 2
+// drivers/dds/idl/fillet_line.idl (CameraEstimates, LineCommand, LineStatus, DriveFeedback,
+// LineSensors), and the ROS 2
 // sensor_msgs/msg/CompressedImage that carries the PNG frames.
 //
 // Encoding: plain (XCDR1) CDR, little endian, as Cyclone DDS puts @final structs on the wire
@@ -120,7 +120,7 @@ struct DriveFeedbackSample {
   DriveFeedback feedback;
 };
 
-// fl::LineSensors (line_recording.idl): the InputImage without drives and cameras.
+// fl::LineSensors (fillet_line.idl): the InputImage without drives and cameras.
 struct LineSensorsSample {
   std::uint64_t scan = 0;
   InputImage input;  // time_ns and the sensor members; drives and cameras are not carried

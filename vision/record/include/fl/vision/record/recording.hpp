@@ -8,7 +8,7 @@
 //                             MCAP sequence = the camera's frame sequence, log time = exposure
 //   /camera/<name>/estimates  fl::CameraEstimates (omgidl); log time = the scan at which the
 //                             controller received them
-//   /line/sensors             fl::LineSensors (omgidl, line_recording.idl), one per scan
+//   /line/sensors             fl::LineSensors (omgidl), one per scan
 //   /line/drive_feedback      fl::DriveFeedback (omgidl), one per drive per scan
 //   /line/command             fl::LineCommand (omgidl), one per scan
 //   /line/status              fl::LineStatus (omgidl), one per scan
@@ -53,9 +53,9 @@ std::string image_topic(CameraId camera);
 std::string estimates_topic(CameraId camera);
 std::string calibration_attachment(CameraId camera);
 
-// The schema texts written into recordings.
-std::string_view fillet_line_idl();     // drivers/dds/idl/fillet_line.idl
-std::string_view line_recording_idl();  // vision/record/idl/line_recording.idl
+// The schema texts written into recordings. fillet_line.idl holds every omgidl type of a
+// recording, fl::LineSensors included.
+std::string_view fillet_line_idl();  // drivers/dds/idl/fillet_line.idl
 std::string_view compressed_image_msg();
 
 // A recording that cannot be read: names the file, the record (channel, sequence, log time

@@ -1,0 +1,308 @@
+// linectl control: the line controller as its own process, talking only DDS (two_process.hpp,
+// docs/dds.md "Two-process mode").
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <thread>
+
+#include "duration.hpp"
+#include "fl/apps/closed_loop.hpp"
+#include "fl/controller/config_loader.hpp"
+#include "fl/controller/line_controller.hpp"
+#include "fl/controller/runtime.hpp"
+#include "fl/drivers/dds/camera_input.hpp"
+#include "fl/drivers/dds/line_io.hpp"
+#include "fl/drivers/dds/line_output.hpp"
+#include "fl/drivers/dds/process_io.hpp"
+#include "two_process.hpp"
+
+namespace fl::apps {
+namespace {
+
+namespace dds = fl::drivers::dds;
+
+std::atomic<int> g_control_interrupts{0};
+extern "C" void on_control_signal(int /*signal*/) { g_control_interrupts.fetch_add(1); }
+
+// How often the non-real-time side drains the ledger and event rings: the record ring holds
+// 256 records, far more than the line closes in 20 ms.
+constexpr auto kDrainPeriod = std::chrono::milliseconds(20);
+
+std::filesystem::path default_config(const char* file) {
+  const std::filesystem::path source = std::filesystem::path(FL_SOURCE_DIR) / "config" / file;
+  if (std::filesystem::exists(source)) return source;
+  return std::filesystem::path("config") / file;
+}
+
+void log_control_event(const Event& event) {
+  const double time_s = static_cast<double>(event.time_ns) / 1e9;
+  switch (event.code) {
+    case EventCode::kFaultRaised:
+      spdlog::warn("fault raised: {} at {:.3f} s", to_string(static_cast<FaultCode>(event.source)),
+                   time_s);
+      break;
+    case EventCode::kFaultCleared:
+      spdlog::info("fault cleared: {} at {:.3f} s", to_string(static_cast<FaultCode>(event.source)),
+                   time_s);
+      break;
+    case EventCode::kStateChanged:
+      spdlog::info("line state {} at {:.3f} s", static_cast<int>(event.source), time_s);
+      break;
+    default:
+      spdlog::debug("{} (source {}, item {}, value {:.3f}) at {:.3f} s", to_string(event.code),
+                    event.source, event.item_id, event.value, time_s);
+  }
+}
+
+// The same columns as linectl run --ledger.
+class ControlLedgerWriter {
+ public:
+  explicit ControlLedgerWriter(const std::string& path) {
+    if (path.empty()) return;
+    file_.open(path);
+    if (!file_) throw std::runtime_error("--ledger " + path + ": cannot open for writing");
+    file_ << "id,created_s,closed_s,outcome,lost_reason,hand,side_seen,singulated,flip_plate1,"
+             "flip_plate2,multilane_unit,angle_at_camera1_deg,final_angle_deg,final_y_mm\n";
+  }
+  void write(const FilletRecord& r) {
+    if (!file_.is_open()) return;
+    constexpr double kDeg = 180.0 / std::numbers::pi;
+    file_ << r.id << ',' << static_cast<double>(r.created_ns) / 1e9 << ','
+          << static_cast<double>(r.closed_ns) / 1e9 << ',' << to_string(r.outcome) << ','
+          << to_string(r.lost_reason) << ',' << static_cast<int>(r.hand) << ','
+          << static_cast<int>(r.side_seen) << ',' << r.singulated << ',' << r.flip_plate1 << ','
+          << r.flip_plate2 << ',' << static_cast<int>(r.multilane_unit) << ','
+          << r.angle_at_camera1_rad * kDeg << ',' << r.final_angle_rad * kDeg << ',' << r.final_y_mm
+          << '\n';
+  }
+
+ private:
+  std::ofstream file_;
+};
+
+nlohmann::json summary_json(const DistributionSummary& s) {
+  return {{"count", s.count},
+          {"p50", static_cast<double>(s.p50_ns) / 1e3},
+          {"p99", static_cast<double>(s.p99_ns) / 1e3},
+          {"max", static_cast<double>(s.max_ns) / 1e3}};
+}
+
+}  // namespace
+
+CLI::App* add_control_subcommand(CLI::App& app, ControlArgs& args) {
+  CLI::App* control = app.add_subcommand("control",
+                                         "run the line controller on DDS (estimates, sensors in; "
+                                         "commands, status out) on the 10 ms real-time schedule");
+  control->add_option("--duration", args.duration,
+                      "feeding time: the line is stopped after it, e.g. 60s, 10m");
+  control->add_option("--config", args.config, "line configuration (YAML)");
+  control->add_option("--json", args.json_path, "write the ledger summary and timing as JSON");
+  control->add_option("--ledger", args.ledger_path, "write every ledger record as CSV");
+  control->add_option("--domain", args.domain, "DDS domain id (default: CYCLONEDDS_URI's)")
+      ->check(CLI::Range(0, 232));
+  control->add_option("--wait", args.wait, "how long to wait for the line's sensors, e.g. 30s");
+  control->add_option("--drain", args.drain, "longest wait for the line to stop, e.g. 60s");
+  control->add_option("--fifo", args.fifo_priority, "SCHED_FIFO priority of the scan (1-99)")
+      ->check(CLI::Range(0, 99));
+  control->add_flag("--mlock", args.lock_memory, "lock memory (mlockall)");
+  return control;
+}
+
+int control_command(const ControlArgs& args) {
+  const auto duration_s = parse_duration_s(args.duration);
+  const auto wait_s = parse_duration_s(args.wait);
+  const auto drain_s = parse_duration_s(args.drain);
+  if (!duration_s || !wait_s || !drain_s) {
+    spdlog::error(
+        "--duration {}, --wait {}, --drain {}: each must be a positive duration "
+        "(examples: 90s, 10m)",
+        args.duration, args.wait, args.drain);
+    return 2;
+  }
+  const std::filesystem::path config_file =
+      args.config.empty() ? default_config("line.yaml") : std::filesystem::path(args.config);
+  const LineConfig line = load_line_config(config_file);
+  ControlLedgerWriter ledger(args.ledger_path);
+
+  const dds_domainid_t domain =
+      args.domain < 0 ? DDS_DOMAIN_DEFAULT : static_cast<dds_domainid_t>(args.domain);
+  dds::Participant participant(domain);
+  dds::DdsCameraInput cameras(participant);
+  dds::DdsSensorInput sensors(participant);
+  dds::DdsLineOutput output(participant);
+  dds::DdsProcessIo io(cameras, sensors, output);
+
+  LineController controller(line);
+  LineControllerLogic logic(controller);
+  RuntimeOptions options;
+  options.fifo_priority = args.fifo_priority;
+  options.lock_memory = args.lock_memory;
+  options.on_fault = [](RuntimeFault fault) {
+    spdlog::error("runtime fault: {}", to_string(fault));
+  };
+  ScanRuntime runtime(io, logic, options);
+
+  std::signal(SIGINT, on_control_signal);
+  std::signal(SIGTERM, on_control_signal);
+
+  // The line's I/O first: a controller that starts scanning before the sensors arrive sees an
+  // open safety chain and latches kEstop (DdsProcessIo), which only an acknowledge clears.
+  spdlog::info("control: waiting up to {} s for the line's sensors", *wait_s);
+  const auto wait_start = std::chrono::steady_clock::now();
+  while (!sensors.delivered()) {
+    const double waited_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wait_start).count();
+    if (waited_s > *wait_s || g_control_interrupts.load() > 0) {
+      spdlog::error(
+          "control: no LineSensors on '{}' within {} s (is the twin or the line's I/O "
+          "running on the same domain and CYCLONEDDS_URI?)",
+          dds::kSensorsTopic, *wait_s);
+      return 4;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+
+  KpiCollector collector(line);
+  std::uint64_t records = 0;
+  const auto drain = [&] {
+    while (auto record = controller.closed_records().pop()) {
+      ledger.write(*record);
+      ++records;
+    }
+    while (auto event = controller.events().pop()) {
+      collector.add_event(*event);
+      log_control_event(*event);
+    }
+  };
+
+  // The operator's start, as linectl run gives it, applied at the first scan.
+  logic.request_start();
+  const auto wall_start = std::chrono::steady_clock::now();
+  const RealtimeSetup setup = runtime.start();
+  if (!setup.error.empty()) spdlog::warn("real-time setup: {}", setup.error);
+  if (!setup.started) throw std::runtime_error("the scan runtime did not start: " + setup.error);
+  spdlog::info("control: scanning; {} s of feeding, then a controlled stop", *duration_s);
+
+  bool stop_sent = false;
+  bool line_faulted = false;
+  double elapsed_s = 0.0;
+  while (runtime.running()) {
+    std::this_thread::sleep_for(kDrainPeriod);
+    drain();
+    elapsed_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    if (!stop_sent && (elapsed_s >= *duration_s || g_control_interrupts.load() > 0)) {
+      logic.request_stop();
+      stop_sent = true;
+    }
+    const LineState state = io.state();
+    // A fault stops the line; the run ends there with whatever the ledger then holds.
+    if (state == LineState::kFault && !line_faulted) {
+      line_faulted = true;
+      spdlog::error("control: the line faulted (active faults 0x{:x}); ending the run",
+                    io.active_faults());
+      runtime.request_stop();
+    }
+    const bool stopped = stop_sent && state == LineState::kStopped;
+    if (stopped || elapsed_s > *duration_s + *drain_s || g_control_interrupts.load() > 1) {
+      runtime.request_stop();
+    }
+  }
+  runtime.wait();
+  drain();
+  controller.close_all_in_transit(io.last_scan_time_ns(), LostReason::kRunEnded);
+  drain();
+
+  Kpis kpis;
+  kpis.plant = "dds";
+  collector.finish(controller, 0, 0, *duration_s, elapsed_s, elapsed_s, kpis);
+  const CycleStatsSummary stats = runtime.stats().summary();
+  kpis.compute = stats.compute;
+  const dds::LineOutputCounters out = output.counters();
+  const dds::IntakeCounters intake = cameras.counters();
+  const dds::SensorInputCounters sensor_counts = sensors.counters();
+  const dds::ReactionLatency latency = output.reaction_latency();
+
+  nlohmann::json json = to_json(kpis);
+  for (const char* key : {"truth", "placed_per_minute", "in_spec_share_of_singulated", "plant",
+                          "seed", "simulated_s", "realtime_factor"}) {
+    json.erase(key);
+  }
+  json["runtime"] = {{"scans", stats.scans},
+                     {"overruns", stats.overruns},
+                     {"fault", to_string(runtime.fault())},
+                     {"line_faulted", line_faulted},
+                     {"wakeup_latency_us", summary_json(stats.wakeup_latency)}};
+  json["dds"] = {{"commands_published", out.commands_published},
+                 {"commands_dropped", out.commands_dropped},
+                 {"command_write_failures", out.write_failures},
+                 {"estimates_accepted", intake.samples_accepted},
+                 {"estimates_rejected", intake.rejected_total()},
+                 {"sensors_accepted", sensor_counts.sensors_accepted},
+                 {"sensors_rejected", sensor_counts.sensors_rejected},
+                 {"feedback_accepted", sensor_counts.feedback_accepted},
+                 {"sensors_stale_scans", io.sensors_stale_scans()},
+                 {"estimate_transport_us", summary_json(latency.transport)},
+                 {"estimate_to_command_us", summary_json(latency.reaction)}};
+
+  std::printf(
+      "control, %.1f s fed, %.1f s wall, %llu scans, %llu overruns, wake-up latency "
+      "p99.9 %.1f us max %.1f us\n",
+      *duration_s, elapsed_s, static_cast<unsigned long long>(stats.scans),
+      static_cast<unsigned long long>(stats.overruns),
+      static_cast<double>(stats.wakeup_latency.p999_ns) / 1e3,
+      static_cast<double>(stats.wakeup_latency.max_ns) / 1e3);
+  std::printf("ledger          items %llu (+%llu adopted), closed %llu, records %llu (%s):",
+              static_cast<unsigned long long>(kpis.items_created),
+              static_cast<unsigned long long>(kpis.counters.items_adopted),
+              static_cast<unsigned long long>(kpis.items_closed),
+              static_cast<unsigned long long>(records),
+              kpis.ledger_balanced ? "balanced" : "UNBALANCED");
+  for (std::size_t o = 1; o < kOutcomeCount; ++o) {
+    if (kpis.outcomes[o] != 0) {
+      std::printf(" %s=%llu", to_string(static_cast<Outcome>(o)),
+                  static_cast<unsigned long long>(kpis.outcomes[o]));
+    }
+  }
+  std::printf("\nthroughput      %.1f items/min at the takt\n", kpis.items_per_minute);
+  std::printf(
+      "dds             %llu commands (%llu dropped), %llu estimates (%llu rejected), "
+      "%llu sensor samples, %llu stale scans\n",
+      static_cast<unsigned long long>(out.commands_published),
+      static_cast<unsigned long long>(out.commands_dropped),
+      static_cast<unsigned long long>(intake.samples_accepted),
+      static_cast<unsigned long long>(intake.rejected_total()),
+      static_cast<unsigned long long>(sensor_counts.sensors_accepted),
+      static_cast<unsigned long long>(io.sensors_stale_scans()));
+  std::printf(
+      "latency         estimate transport p50 %.1f us p99 %.1f us; estimate to command "
+      "p50 %.1f us p99 %.1f us max %.1f us (%llu frames)\n",
+      static_cast<double>(latency.transport.p50_ns) / 1e3,
+      static_cast<double>(latency.transport.p99_ns) / 1e3,
+      static_cast<double>(latency.reaction.p50_ns) / 1e3,
+      static_cast<double>(latency.reaction.p99_ns) / 1e3,
+      static_cast<double>(latency.reaction.max_ns) / 1e3,
+      static_cast<unsigned long long>(latency.reaction.count));
+  std::fflush(stdout);
+
+  if (!args.json_path.empty()) {
+    std::ofstream file(args.json_path);
+    if (!file) {
+      spdlog::error("--json {}: cannot open for writing", args.json_path);
+      return 1;
+    }
+    file << json.dump(2) << '\n';
+  }
+  if (!kpis.ledger_balanced) return 3;
+  if (line_faulted) return io.sensors_stale_scans() > 0 ? 4 : 1;
+  if (runtime.fault() != RuntimeFault::kNone) return 1;  // the scan stopped before the line did
+  return 0;
+}
+
+}  // namespace fl::apps

@@ -1,0 +1,351 @@
+// linectl twin serve: the plant as the line's devices and cameras on DDS, in real time
+// (two_process.hpp, docs/dds.md "Two-process mode").
+#include <pthread.h>
+#include <sched.h>
+#include <spdlog/spdlog.h>
+
+#include <array>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <csignal>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "duration.hpp"
+#include "fl/apps/closed_loop.hpp"
+#include "fl/controller/config_loader.hpp"
+#include "fl/controller/line_controller.hpp"
+#include "fl/controller/runtime.hpp"
+#include "fl/drivers/dds/line_io.hpp"
+#include "fl/drivers/dds/line_output.hpp"
+#include "fl/twin/dem_plant/dem_plant.hpp"
+#include "fl/twin/fast_plant.hpp"
+#include "fl/twin/fast_plant_config.hpp"
+#include "two_process.hpp"
+
+namespace fl::apps {
+namespace {
+
+namespace dds = fl::drivers::dds;
+
+std::atomic<bool> g_twin_interrupted{false};
+extern "C" void on_twin_signal(int /*signal*/) { g_twin_interrupted.store(true); }
+
+constexpr std::int64_t kPeriodNs = 10'000'000;  // the line's scan period, as the runtime's
+// The drives keep the last command this long when commands stop arriving (a hiccup of the
+// controller's host), then the twin applies the safe output image, as the drives' own
+// command-timeout would: 10 scans, well beyond the runtime's 3-scan overrun fault.
+constexpr std::int64_t kCommandStaleNs = 100'000'000;
+// After the controller has stopped the line (every drive disabled), fillets still on the
+// belts stay there; wait this long for the plant to report them gone before ending the run.
+constexpr std::int64_t kStoppedSettleNs = 1'000'000'000;
+
+std::int64_t monotonic_ns() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
+}
+
+void sleep_until(std::int64_t time_ns) {
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(time_ns / 1'000'000'000);
+  ts.tv_nsec = static_cast<long>(time_ns % 1'000'000'000);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    if (g_twin_interrupted.load()) return;
+  }
+}
+
+std::filesystem::path default_config(const char* file) {
+  const std::filesystem::path source = std::filesystem::path(FL_SOURCE_DIR) / "config" / file;
+  if (std::filesystem::exists(source)) return source;
+  return std::filesystem::path("config") / file;
+}
+
+std::unique_ptr<Plant> make_twin_plant(const TwinServeArgs& args, const LineConfig& line) {
+  if (args.plant == "fast") {
+    const std::filesystem::path file = args.plant_config.empty()
+                                           ? default_config("plant_fast.yaml")
+                                           : std::filesystem::path(args.plant_config);
+    return std::make_unique<FastPlant>(line, load_fast_plant_config(file));
+  }
+  if (args.plant == "dem") {
+    const std::filesystem::path file = args.plant_config.empty()
+                                           ? default_config("plant_dem.yaml")
+                                           : std::filesystem::path(args.plant_config);
+    return std::make_unique<DemPlant>(line, load_dem_plant_config(file));
+  }
+  throw std::runtime_error("--plant " + args.plant + ": unknown plant (choose fast or dem)");
+}
+
+bool any_drive_enabled(const OutputImage& out) {
+  for (const DriveCommand& drive : out.drives) {
+    if (drive.enable) return true;
+  }
+  return false;
+}
+
+nlohmann::json summary_json(const DistributionSummary& s) {
+  return {{"count", s.count},
+          {"p50", static_cast<double>(s.p50_ns) / 1e3},
+          {"p99", static_cast<double>(s.p99_ns) / 1e3},
+          {"max", static_cast<double>(s.max_ns) / 1e3}};
+}
+
+struct TwinStats {
+  std::uint64_t ticks = 0;
+  std::uint64_t late_ticks = 0;     // woke more than a period after their scheduled time
+  std::uint64_t skipped_ticks = 0;  // periods the plant stepped over in one go
+  std::uint64_t commands_applied = 0;
+  std::uint64_t stale_ticks = 0;  // ticks on the safe output image after the line started
+  std::array<std::uint64_t, kCameraCount> frames_published{};
+  std::uint64_t publish_failures = 0;
+};
+
+}  // namespace
+
+CLI::App* add_twin_subcommand(CLI::App& app, TwinServeArgs& args) {
+  CLI::App* twin = app.add_subcommand("twin", "the digital twin as a separate process");
+  twin->require_subcommand(1);
+  CLI::App* serve = twin->add_subcommand(
+      "serve", "run a plant in real time as the line's devices and cameras on DDS");
+  serve->add_option("--plant", args.plant, "fast (2D plant) or dem (DEM twin)")
+      ->check(CLI::IsMember({"fast", "dem"}));
+  serve->add_option("--seed", args.seed, "plant seed");
+  serve->add_option("--duration", args.duration, "feeding time, e.g. 60s, 10m (as linectl run)");
+  serve->add_option("--config", args.config, "line configuration (YAML)");
+  serve->add_option("--plant-config", args.plant_config, "plant configuration (YAML)");
+  serve->add_option("--json", args.json_path, "write the ground-truth KPIs as JSON to this file");
+  serve->add_option("--domain", args.domain, "DDS domain id (default: CYCLONEDDS_URI's)")
+      ->check(CLI::Range(0, 232));
+  serve->add_option("--wait", args.wait, "how long to wait for a controller, e.g. 30s");
+  serve->add_option("--drain", args.drain, "longest run after the feeding time, e.g. 60s");
+  serve->add_option("--fifo", args.fifo_priority, "SCHED_FIFO priority of the tick loop (1-99)")
+      ->check(CLI::Range(0, 99));
+  return serve;
+}
+
+int twin_serve_command(const TwinServeArgs& args) {
+  const auto duration_s = parse_duration_s(args.duration);
+  const auto wait_s = parse_duration_s(args.wait);
+  const auto drain_s = parse_duration_s(args.drain);
+  if (!duration_s || !wait_s || !drain_s) {
+    spdlog::error(
+        "--duration {}, --wait {}, --drain {}: each must be a positive duration "
+        "(examples: 90s, 10m)",
+        args.duration, args.wait, args.drain);
+    return 2;
+  }
+  const std::filesystem::path config_file =
+      args.config.empty() ? default_config("line.yaml") : std::filesystem::path(args.config);
+  const LineConfig line = load_line_config(config_file);
+  std::unique_ptr<Plant> plant = make_twin_plant(args, line);
+
+  const dds_domainid_t domain =
+      args.domain < 0 ? DDS_DOMAIN_DEFAULT : static_cast<dds_domainid_t>(args.domain);
+  dds::Participant participant(domain);
+  // One writer for every camera, offering the slowest camera's deadline: each camera is an
+  // instance and the faster ones meet it with room to spare.
+  dds::DdsCameraPublisher cameras(participant, dds::kSlowestCameraPeriodNs);
+  dds::DdsSensorPublisher sensors(participant, kPeriodNs);
+  dds::DdsCommandInput commands(participant, kPeriodNs);
+
+  std::signal(SIGINT, on_twin_signal);
+  std::signal(SIGTERM, on_twin_signal);
+
+  // The plant's clock starts when a controller is there: a matched command writer. Until
+  // then nothing is published, so the controller's first input image is the plant at time 0.
+  spdlog::info("twin: {} plant, seed {}, {} s of feeding; waiting up to {} s for a controller",
+               plant->name(), args.seed, *duration_s, *wait_s);
+  const auto wait_start = std::chrono::steady_clock::now();
+  while (commands.matched_writers() == 0) {
+    const double waited_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wait_start).count();
+    if (waited_s > *wait_s || g_twin_interrupted.load()) {
+      spdlog::error(
+          "twin: no controller matched the command topic within {} s (is linectl "
+          "control running on the same domain and CYCLONEDDS_URI?)",
+          *wait_s);
+      return 4;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+
+  if (args.fifo_priority > 0) {
+    // The tick loop runs on this thread. Like the runtime without realtime_required: a
+    // refusal (no CAP_SYS_NICE) is logged and the twin runs on SCHED_OTHER.
+    sched_param param{};
+    param.sched_priority = args.fifo_priority;
+    if (const int error = pthread_setschedparam(pthread_self(), SCHED_FIFO, &param); error != 0) {
+      spdlog::warn("twin: SCHED_FIFO {} refused ({}); running on SCHED_OTHER", args.fifo_priority,
+                   std::strerror(error));
+    }
+  }
+  InputImage plant_in;
+  plant->reset(args.seed, plant_in);
+  KpiCollector collector(line);
+  TwinStats stats;
+  DurationHistogram lateness(10'000, 100'000'000);  // tick wake-up lateness, 10 us bins
+  std::array<std::uint32_t, kCameraCount> published_sequence{};
+  for (std::size_t c = 0; c < kCameraCount; ++c) {
+    published_sequence[c] = plant_in.cameras[c].sequence;
+  }
+
+  const std::int64_t start_ns = monotonic_ns() + kPeriodNs;
+  // Frame times are on the plant's clock; the controller's is CLOCK_MONOTONIC of this host.
+  const std::int64_t offset_ns = start_ns - plant_in.time_ns;
+  const auto limit_ns = static_cast<std::int64_t>((*duration_s + *drain_s) * 1e9);
+  const OutputImage safe = make_safe_output_image();
+  dds::ReceivedCommand command;
+  bool have_command = false;
+  bool line_ran = false;
+  bool controller_lost = false;
+  std::int64_t stopped_since_ns = -1;
+  std::int64_t scheduled_ns = start_ns;
+  std::int64_t last_stepped_ns = start_ns;
+  const auto wall_start = std::chrono::steady_clock::now();
+
+  for (std::uint64_t tick = 0; !g_twin_interrupted.load(); ++tick) {
+    sleep_until(scheduled_ns);
+    const std::int64_t woke_ns = monotonic_ns();
+    lateness.record(woke_ns - scheduled_ns);
+    ++stats.ticks;
+    if (woke_ns - scheduled_ns > kPeriodNs) ++stats.late_ticks;
+
+    if (commands.read(command)) have_command = true;
+    const bool fresh = have_command && dds_time() - command.arrival_ns <= kCommandStaleNs;
+    const OutputImage& applied = fresh ? command.out : safe;
+    if (fresh) ++stats.commands_applied;
+    if (!fresh && line_ran) {
+      ++stats.stale_ticks;
+      if (stopped_since_ns < 0) controller_lost = true;  // stale while the line was running
+    }
+
+    // Skipped periods after a late wake-up advance the plant by the whole gap, as PlantIo
+    // does: the real line would have moved on.
+    const std::int64_t dt_ns = scheduled_ns - last_stepped_ns;
+    if (dt_ns > 0) plant->step(applied, dt_ns, plant_in);
+    last_stepped_ns = scheduled_ns;
+    for (const TrueFilletExit& exit : plant->drain_exits()) collector.add_exit(exit);
+
+    for (std::size_t c = 0; c < kCameraCount; ++c) {
+      CameraFrame frame = plant_in.cameras[c];
+      if (frame.sequence == published_sequence[c]) continue;
+      published_sequence[c] = frame.sequence;
+      frame.frame_time_ns += offset_ns;
+      try {
+        cameras.publish(static_cast<CameraId>(c), frame);
+        ++stats.frames_published[c];
+      } catch (const dds::DdsError& error) {
+        ++stats.publish_failures;
+        spdlog::warn("twin: camera {} frame {}: {}", c, frame.sequence, error.what());
+      }
+    }
+    InputImage io_in = plant_in;
+    io_in.time_ns = scheduled_ns;
+    if (!sensors.publish(tick, io_in)) ++stats.publish_failures;
+
+    // The run ends when the controller has stopped the line after running it and the belts
+    // are empty (or have stood still long enough), or at the time limit.
+    if (any_drive_enabled(applied)) {
+      line_ran = true;
+      stopped_since_ns = -1;
+    } else if (line_ran && stopped_since_ns < 0) {
+      stopped_since_ns = scheduled_ns;
+    }
+    const bool stopped = stopped_since_ns >= 0;
+    const bool settled = stopped && (plant->fillets_on_line() == 0 ||
+                                     scheduled_ns - stopped_since_ns >= kStoppedSettleNs);
+    if (settled || plant_in.time_ns >= limit_ns) break;
+
+    // Next tick on the absolute schedule; after a late wake-up, the next one in the future.
+    scheduled_ns += kPeriodNs;
+    const std::int64_t now_ns = monotonic_ns();
+    if (now_ns > scheduled_ns) {
+      const std::int64_t behind = (now_ns - scheduled_ns) / kPeriodNs;
+      stats.skipped_ticks += static_cast<std::uint64_t>(behind);
+      scheduled_ns += behind * kPeriodNs;
+    }
+  }
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+
+  // The ground truth, counted by the same collector as linectl run. The controller's side of
+  // the books is in the other process: a controller that never ran supplies empty counters,
+  // and its sections are left out of the JSON.
+  const LineController no_controller(line);
+  Kpis kpis;
+  kpis.plant = plant->name();
+  kpis.seed = args.seed;
+  const double simulated_s = static_cast<double>(plant_in.time_ns) / 1e9;
+  collector.finish(no_controller, plant->fillets_fed(), plant->fillets_on_line(), *duration_s,
+                   simulated_s, wall_s, kpis);
+  nlohmann::json json = to_json(kpis);
+  for (const char* key : {"ledger", "controller", "cycle_compute_us", "items_per_minute"}) {
+    json.erase(key);
+  }
+  const DistributionSummary late = lateness.summary();
+  const DistributionSummary transport = commands.transport_latency();
+  json["twin"] = {{"ticks", stats.ticks},
+                  {"late_ticks", stats.late_ticks},
+                  {"skipped_ticks", stats.skipped_ticks},
+                  {"wakeup_lateness_us", summary_json(late)},
+                  {"commands_received", commands.commands_received()},
+                  {"commands_applied", stats.commands_applied},
+                  {"stale_ticks", stats.stale_ticks},
+                  {"controller_lost", controller_lost},
+                  {"frames_published", stats.frames_published},
+                  {"publish_failures", stats.publish_failures},
+                  {"command_transport_us", summary_json(transport)}};
+
+  const TruthTally& t = kpis.truth;
+  std::printf("twin %s, seed %llu, %.1f s fed, %.1f s line time in %.1f s wall\n",
+              kpis.plant.c_str(), static_cast<unsigned long long>(args.seed), *duration_s,
+              simulated_s, wall_s);
+  std::printf("throughput      %.1f placed/min\n", kpis.placed_per_minute);
+  std::printf("in spec         %.2f %% of singulated fillets (%llu of %llu)\n",
+              100.0 * kpis.in_spec_share, static_cast<unsigned long long>(t.outfeed_in_spec),
+              static_cast<unsigned long long>(t.singulated_exits));
+  std::printf(
+      "truth           fed %llu, placed %llu, crate %llu, air knife %llu, fell off %llu, "
+      "on line %llu (%s)\n",
+      static_cast<unsigned long long>(t.fed), static_cast<unsigned long long>(t.outfeed),
+      static_cast<unsigned long long>(t.reject_crate),
+      static_cast<unsigned long long>(t.final_reject), static_cast<unsigned long long>(t.fell_off),
+      static_cast<unsigned long long>(t.on_line_at_end),
+      kpis.truth_balanced ? "balanced" : "UNBALANCED");
+  std::printf("ticks           %llu, late %llu, wake-up lateness p99 %.1f us max %.1f us\n",
+              static_cast<unsigned long long>(stats.ticks),
+              static_cast<unsigned long long>(stats.late_ticks),
+              static_cast<double>(late.p99_ns) / 1e3, static_cast<double>(late.max_ns) / 1e3);
+  std::printf("commands        %llu received, command transport p50 %.1f us p99 %.1f us\n",
+              static_cast<unsigned long long>(commands.commands_received()),
+              static_cast<double>(transport.p50_ns) / 1e3,
+              static_cast<double>(transport.p99_ns) / 1e3);
+  std::fflush(stdout);
+
+  if (!args.json_path.empty()) {
+    std::ofstream file(args.json_path);
+    if (!file) {
+      spdlog::error("--json {}: cannot open for writing", args.json_path);
+      return 1;
+    }
+    file << json.dump(2) << '\n';
+  }
+  if (!line_ran) {
+    spdlog::error("twin: the controller never started the line");
+    return 4;
+  }
+  if (controller_lost) {
+    spdlog::error("twin: the controller's commands stopped while the line was running");
+    return 4;
+  }
+  return kpis.truth_balanced ? 0 : 3;
+}
+
+}  // namespace fl::apps

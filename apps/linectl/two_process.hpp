@@ -1,0 +1,49 @@
+// linectl's two-process mode over DDS (issue 5 item 5; docs/dds.md, "Two-process mode"):
+//   linectl twin serve --plant fast|dem --seed N --duration D [--json twin.json]
+//       the plant in real time: publishes camera estimates, sensors and drive feedback,
+//       applies the controller's commands, writes the ground-truth KPIs
+//   linectl control --duration D [--json control.json] [--ledger ledger.csv]
+//       the real ScanRuntime and LineController on DDS only; exits with the ledger summary
+// Both take --domain (the DDS domain id; CYCLONEDDS_URI chooses the configuration).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <cstdint>
+#include <string>
+
+namespace fl::apps {
+
+struct TwinServeArgs {
+  std::string plant = "fast";
+  std::uint64_t seed = 1;
+  std::string duration = "60s";  // feeding time, the same meaning as linectl run
+  std::string config;            // line configuration; default config/line.yaml
+  std::string plant_config;      // default per plant
+  std::string json_path;
+  int domain = -1;            // -1: the domain of CYCLONEDDS_URI's configuration
+  std::string wait = "30s";   // how long to wait for a controller before giving up
+  std::string drain = "60s";  // longest run after the feeding time (as linectl run --realtime)
+  int fifo_priority = 0;      // 1..99: SCHED_FIFO for the tick loop; 0: SCHED_OTHER
+};
+
+struct ControlArgs {
+  std::string duration = "60s";  // feeding time: the controller stops the line after it
+  std::string config;            // line configuration; default config/line.yaml
+  std::string json_path;
+  std::string ledger_path;
+  int domain = -1;
+  std::string wait = "30s";   // how long to wait for the line's sensors before giving up
+  std::string drain = "60s";  // longest wait for the line to stop after the stop request
+  int fifo_priority = 0;
+  bool lock_memory = false;
+};
+
+CLI::App* add_twin_subcommand(CLI::App& app, TwinServeArgs& args);
+CLI::App* add_control_subcommand(CLI::App& app, ControlArgs& args);
+// Exit codes of both: 0 the run completed and its books balance (twin: ground truth;
+// control: the ledger); 2 bad options or configuration; 3 books unbalanced; 4 the peer never
+// appeared or vanished; 1 anything else.
+int twin_serve_command(const TwinServeArgs& args);
+int control_command(const ControlArgs& args);
+
+}  // namespace fl::apps

@@ -1,0 +1,66 @@
+// The controller's whole process image over DDS: a ProcessIo for the real ScanRuntime that
+// reads camera estimates (DdsCameraInput), sensors and drive feedback (DdsSensorInput) and
+// writes commands and status (DdsLineOutput). The scan thread never calls Cyclone: read()
+// and write() only copy from and into the parts' triple buffers (docs/dds.md, "Real-time
+// contract"), so this composite keeps their guarantees.
+//
+// The sensors' safe reaction: when no LineSensors sample arrived for sensors_stale_ns (the
+// line's I/O side died, hung or was never there), read() reports the safety chain open
+// (estop_ok false), so the controller faults with kEstop and stops every drive, as a
+// CANopen I/O node lost from the bus would. The frozen sample is never trusted longer.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+
+#include "fl/controller/process_image.hpp"
+#include "fl/controller/runtime.hpp"
+#include "fl/drivers/dds/camera_input.hpp"
+#include "fl/drivers/dds/line_io.hpp"
+#include "fl/drivers/dds/line_output.hpp"
+
+namespace fl::drivers::dds {
+
+struct DdsProcessIoOptions {
+  // 20 scans: longer than any scheduling hiccup measured on a loaded development machine
+  // (docs/dds.md, two-process mode) so that jitter alone never stops the line, and short
+  // enough that the belts stop within a fifth of a second of losing the I/O side.
+  std::int64_t sensors_stale_ns = 200'000'000;
+};
+
+class DdsProcessIo final : public ProcessIo {
+ public:
+  DdsProcessIo(DdsCameraInput& cameras, DdsSensorInput& sensors, DdsLineOutput& output,
+               DdsProcessIoOptions options = {});
+
+  // Scan thread, real-time.
+  void read(std::int64_t now_ns, InputImage& in) override;
+  void write(const OutputImage& out) override;
+
+  // Any thread.
+  [[nodiscard]] LineState state() const noexcept { return state_.load(std::memory_order_acquire); }
+  [[nodiscard]] std::uint32_t active_faults() const noexcept {
+    return faults_.load(std::memory_order_relaxed);
+  }
+  [[nodiscard]] std::int64_t last_scan_time_ns() const noexcept {
+    return last_scan_ns_.load(std::memory_order_relaxed);
+  }
+  // Scans that saw the sensors stale (and so the safety chain open).
+  [[nodiscard]] std::uint64_t sensors_stale_scans() const noexcept {
+    return stale_scans_.load(std::memory_order_relaxed);
+  }
+
+ private:
+  DdsCameraInput& cameras_;
+  DdsSensorInput& sensors_;
+  DdsLineOutput& output_;
+  const DdsProcessIoOptions options_;
+  FrameStamps stamps_{};      // scan thread's own: the frames this scan read
+  std::int64_t scan_ns_ = 0;  // scan thread's own
+  std::atomic<LineState> state_{LineState::kStopped};
+  std::atomic<std::uint32_t> faults_{0};
+  std::atomic<std::int64_t> last_scan_ns_{0};
+  std::atomic<std::uint64_t> stale_scans_{0};
+};
+
+}  // namespace fl::drivers::dds
