@@ -1,0 +1,297 @@
+// Shared building blocks of the model tests (fl/twin/model_tests/fixtures.hpp).
+#include "fl/twin/model_tests/fixtures.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <exception>
+#include <mutex>
+#include <numbers>
+#include <stdexcept>
+#include <thread>
+
+#include "fl/twin/dem/config.hpp"
+
+namespace fl::model_tests {
+
+dem::ModelSpec make_spec(const CommonParams& common) {
+  dem::ModelSpec spec =
+      common.base_spec.types.empty() ? dem::appendix_b_model_spec() : common.base_spec;
+  if (spec.types.size() < 2 || spec.types[dem::kFilletTypeA].name != "fillet_a" ||
+      spec.types[dem::kFilletTypeB].name != "fillet_b") {
+    throw std::invalid_argument("model tests: engine types 0 and 1 must be fillet_a, fillet_b");
+  }
+  (void)equipment_type(spec);
+  if (common.stiffness) set_bond_stiffness(spec, *common.stiffness);
+  spec.planes.clear();
+  spec.meshes.clear();
+  spec.thread_count = std::max(1, common.thread_count);
+  return spec;
+}
+
+Stiffness spec_stiffness(const dem::ModelSpec& spec) {
+  for (const auto& interaction : spec.interactions) {
+    if (interaction.bond_law && interaction.bond_law->name == "bpm") {
+      const auto& p = interaction.bond_law->parameters;
+      return {p.at("normal_stiffness_n_per_m3"), p.at("shear_stiffness_n_per_m3")};
+    }
+  }
+  return {};
+}
+
+double spec_disk_scale(const dem::ModelSpec& spec) {
+  for (const auto& interaction : spec.interactions) {
+    if (interaction.bond_law) {
+      const auto found = interaction.bond_law->parameters.find("bonded_disk_scale");
+      return found == interaction.bond_law->parameters.end() ? 1.0 : found->second;
+    }
+  }
+  return 1.0;
+}
+
+void set_bond_stiffness(dem::ModelSpec& spec, const Stiffness& stiffness) {
+  for (auto& interaction : spec.interactions) {
+    if (!interaction.bond_law) continue;
+    if (interaction.bond_law->name != "bpm") {
+      throw std::invalid_argument("model tests: bond law '" + interaction.bond_law->name +
+                                  "' has no bpm stiffness");
+    }
+    interaction.bond_law->parameters["normal_stiffness_n_per_m3"] = stiffness.normal_n_per_m3;
+    interaction.bond_law->parameters["shear_stiffness_n_per_m3"] = stiffness.shear_n_per_m3;
+  }
+}
+
+void set_contact_parameter(dem::ModelSpec& spec, const std::string& law, const std::string& key,
+                           double value, std::optional<std::uint32_t> other_type) {
+  bool found = false;
+  for (auto& interaction : spec.interactions) {
+    const bool a_is_fillet = interaction.type_a <= dem::kFilletTypeB;
+    const bool b_is_fillet = interaction.type_b <= dem::kFilletTypeB;
+    if (!a_is_fillet && !b_is_fillet) continue;
+    if (other_type && !((a_is_fillet && interaction.type_b == *other_type) ||
+                        (b_is_fillet && interaction.type_a == *other_type))) {
+      continue;
+    }
+    for (auto& spec_of_law : interaction.contact_laws) {
+      if (spec_of_law.name == law) {
+        spec_of_law.parameters[key] = value;
+        found = true;
+      }
+    }
+  }
+  if (!found) {
+    throw std::invalid_argument("model tests: no contact law '" + law + "' to set '" + key + "'");
+  }
+}
+
+std::uint32_t equipment_type(const dem::ModelSpec& spec) {
+  for (std::size_t k = 0; k < spec.types.size(); ++k) {
+    if (spec.types[k].name == "equipment") return static_cast<std::uint32_t>(k);
+  }
+  throw std::invalid_argument("model tests: the engine model has no type 'equipment'");
+}
+
+dem::FilletTemplate make_fillet(const CommonParams& common, double scale) {
+  return make_fillet_template(common.fillet_mesh.get(), common.sub_particle_radius_m,
+                              common.variant, scale);
+}
+
+std::vector<dem::BodyBond> body_bonds(const dem::FilletTemplate& fillet) {
+  std::vector<dem::BodyBond> bonds;
+  bonds.reserve(fillet.bonds.size());
+  for (const auto& b : fillet.bonds) bonds.push_back({b.i, b.j, b.contact_radius_m});
+  return bonds;
+}
+
+dem::FilletTemplate make_block(double radius_m, int nx, int ny, int nz) {
+  if (nx < 1 || ny < 1 || nz < 2 || !(radius_m > 0.0)) {
+    throw std::invalid_argument("model tests: block needs nx, ny >= 1, nz >= 2, radius > 0");
+  }
+  dem::FilletTemplate block;
+  block.name = "block";
+  const double pitch = 2.0 * radius_m;
+  const Vec3 centre(0.5 * (nx - 1) * pitch, 0.5 * (ny - 1) * pitch, 0.5 * (nz - 1) * pitch);
+  auto index = [&](int x, int y, int z) {
+    return static_cast<std::uint32_t>(x + nx * (y + ny * z));
+  };
+  for (int z = 0; z < nz; ++z) {
+    for (int y = 0; y < ny; ++y) {
+      for (int x = 0; x < nx; ++x) {
+        block.positions_m.push_back(Vec3(x * pitch, y * pitch, z * pitch) - centre);
+        block.radii_m.push_back(radius_m);
+        block.types.push_back((x + y + z) % 2 == 0 ? dem::kFilletTypeA : dem::kFilletTypeB);
+      }
+    }
+  }
+  const double contact_radius = radius_m * std::sqrt(3.0);  // the fillet raster's (3.3.1)
+  for (int z = 0; z < nz; ++z) {
+    for (int y = 0; y < ny; ++y) {
+      for (int x = 0; x < nx; ++x) {
+        if (x + 1 < nx) block.bonds.push_back({index(x, y, z), index(x + 1, y, z), contact_radius});
+        if (y + 1 < ny) block.bonds.push_back({index(x, y, z), index(x, y + 1, z), contact_radius});
+        if (z + 1 < nz) block.bonds.push_back({index(x, y, z), index(x, y, z + 1), contact_radius});
+      }
+    }
+  }
+  block.half_extent_m = centre + Vec3::Constant(radius_m);
+  return block;
+}
+
+double bond_critical_step_s(const dem::ModelSpec& spec, const dem::FilletTemplate& fillet) {
+  std::vector<int> bond_count(fillet.positions_m.size(), 0);
+  for (const auto& b : fillet.bonds) {
+    ++bond_count[b.i];
+    ++bond_count[b.j];
+  }
+  const Stiffness s = spec_stiffness(spec);
+  const double disk = spec_disk_scale(spec);
+  const double density = spec.materials[spec.types[dem::kFilletTypeA].material].density_kg_per_m3;
+  double step = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < bond_count.size(); ++k) {
+    if (bond_count[k] == 0) continue;
+    const double r = fillet.radii_m[k];
+    const double area = std::numbers::pi * disk * r * disk * r;
+    const double stiffness = std::max(s.normal_n_per_m3, s.shear_n_per_m3) * area;
+    const double mass = density * 4.0 / 3.0 * std::numbers::pi * r * r * r;
+    step = std::min(step, 2.0 / std::sqrt(bond_count[k] * stiffness / mass));
+  }
+  return step;
+}
+
+double choose_timestep_s(const CommonParams& common, const dem::ModelSpec& spec,
+                         const dem::FilletTemplate& fillet) {
+  const dem::Material& m = spec.materials[spec.types[dem::kFilletTypeA].material];
+  const double radius = *std::min_element(fillet.radii_m.begin(), fillet.radii_m.end());
+  double dt = common.rayleigh_fraction * dem::rayleigh_time_s(radius, m.density_kg_per_m3,
+                                                              m.youngs_modulus_pa, m.poisson_ratio);
+  if (common.bond_step_fraction > 0.0) {
+    dt = std::min(dt, common.bond_step_fraction * bond_critical_step_s(spec, fillet));
+  }
+  return dt;
+}
+
+dem::MeshWallSpec box_wall(const std::string& name, std::uint32_t type, const Vec3& min_m,
+                           const Vec3& max_m) {
+  // Corners c[k] with bit 0, 1, 2 of k choosing max in x, y, z; two triangles per face,
+  // counter-clockwise seen from outside (the engine treats them two-sided anyway).
+  std::array<Vec3, 8> c;
+  for (std::size_t k = 0; k < 8; ++k) {
+    c[k] = Vec3((k & 1U) != 0U ? max_m.x() : min_m.x(), (k & 2U) != 0U ? max_m.y() : min_m.y(),
+                (k & 4U) != 0U ? max_m.z() : min_m.z());
+  }
+  constexpr std::array<std::array<std::size_t, 4>, 6> kFaces = {
+      {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}}};
+  dem::MeshWallSpec wall;
+  wall.name = name;
+  wall.type = type;
+  for (const auto& f : kFaces) {
+    wall.triangles.push_back({{c[f[0]], c[f[1]], c[f[2]]}});
+    wall.triangles.push_back({{c[f[0]], c[f[2]], c[f[3]]}});
+  }
+  return wall;
+}
+
+dem::PlaneWallSpec floor_plane(std::uint32_t type) {
+  return {"floor", type, Vec3::Zero(), Vec3::UnitZ()};
+}
+
+std::uint32_t add_fillet(dem::Simulation& sim, const dem::FilletTemplate& fillet,
+                         const Eigen::Quaterniond& orientation, double x_m, double y_m,
+                         double bottom_z_m, const Vec3& velocity_m_per_s) {
+  double lowest = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < fillet.positions_m.size(); ++k) {
+    lowest = std::min(lowest, (orientation * fillet.positions_m[k]).z() - fillet.radii_m[k]);
+  }
+  dem::BodyPose pose;
+  pose.position_m = Vec3(x_m, y_m, bottom_z_m - lowest);
+  pose.orientation = orientation;
+  pose.velocity_m_per_s = velocity_m_per_s;
+  const auto bonds = body_bonds(fillet);
+  return sim.add_body(fillet.positions_m, fillet.radii_m, fillet.types, bonds, pose);
+}
+
+double intact_bond_share(const dem::State& state) {
+  if (state.bond_states.empty()) return 1.0;
+  std::size_t intact = 0;
+  for (const auto& b : state.bond_states) intact += b.broken ? 0U : 1U;
+  return static_cast<double>(intact) / static_cast<double>(state.bond_states.size());
+}
+
+double kinetic_energy_j(const dem::EnergyReport& energy) {
+  return energy.kinetic_translational_j + energy.kinetic_rotational_j;
+}
+
+Vec3 centroid_m(const dem::State& state) {
+  Vec3 sum = Vec3::Zero();
+  for (const auto& p : state.position_m) sum += p;
+  return state.size() > 0 ? Vec3(sum / static_cast<double>(state.size())) : sum;
+}
+
+Eigen::Quaterniond random_orientation(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const double u1 = u(rng), u2 = u(rng), u3 = u(rng);
+  const double a = std::sqrt(1.0 - u1), b = std::sqrt(u1);
+  const double tau = 2.0 * std::numbers::pi;
+  return Eigen::Quaterniond(a * std::sin(tau * u2), a * std::cos(tau * u2), b * std::sin(tau * u3),
+                            b * std::cos(tau * u3))
+      .normalized();
+}
+
+Eigen::Quaterniond yaw_pitch_roll(double yaw_rad, double pitch_rad, double roll_rad) {
+  return Eigen::Quaterniond(Eigen::AngleAxisd(yaw_rad, Vec3::UnitZ()) *
+                            Eigen::AngleAxisd(pitch_rad, Vec3::UnitY()) *
+                            Eigen::AngleAxisd(roll_rad, Vec3::UnitX()));
+}
+
+std::array<double, 3> hammersley3(std::size_t k, std::size_t n) {
+  auto radical_inverse = [](std::size_t i, std::size_t base) {
+    double inverse = 0.0, f = 1.0 / static_cast<double>(base);
+    for (double factor = f; i > 0; i /= base, factor *= f) {
+      inverse += factor * static_cast<double>(i % base);
+    }
+    return inverse;
+  };
+  return {static_cast<double>(k) / static_cast<double>(n), radical_inverse(k, 2),
+          radical_inverse(k, 3)};
+}
+
+void parallel_for(std::size_t count, int threads, const std::function<void(std::size_t)>& body,
+                  const std::function<void(std::size_t, std::size_t)>& progress) {
+  std::atomic<std::size_t> next{0};
+  std::atomic<std::size_t> done{0};
+  std::mutex mutex;
+  std::exception_ptr error;
+  auto worker = [&] {
+    for (std::size_t k = next++; k < count; k = next++) {
+      try {
+        body(k);
+      } catch (...) {
+        std::lock_guard lock(mutex);
+        if (!error) error = std::current_exception();
+        next = count;  // stop handing out work
+      }
+      const std::size_t finished = ++done;
+      if (progress) {
+        std::lock_guard lock(mutex);
+        progress(finished, count);
+      }
+    }
+  };
+  const auto n = static_cast<std::size_t>(std::max(1, threads));
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < std::min(n, count); ++t) pool.emplace_back(worker);
+  worker();
+  for (auto& thread : pool) thread.join();
+  if (error) std::rethrow_exception(error);
+}
+
+std::vector<double> log_levels(double first, int decades, const std::vector<double>& mantissas) {
+  std::vector<double> levels;
+  for (int d = 0; d < decades; ++d) {
+    for (const double m : mantissas) levels.push_back(first * m * std::pow(10.0, d));
+  }
+  levels.push_back(first * std::pow(10.0, decades));
+  return levels;
+}
+
+}  // namespace fl::model_tests
