@@ -1,0 +1,252 @@
+// The bulk end of the line as a DEM scene (issue 3 item 2; thesis 5.3 and 6.1): the mailbox
+// hopper with its adjustable slit opening over the bulk belt, the belt, the universal leveller
+// with its rotating blades downstream, and a discharge edge where fillets leave and are counted.
+//
+// Frame: x along the travel (the gate's plane at x = gate.x_mm), y across (0 on the belt
+// centre), z up (0 on the belt surface). Every wall is a triangle mesh built from
+// config/bulk_dem.yaml; the gate is moved by translating its wall (z = the opening), the belt
+// is a surface velocity, the leveller's rotor turns about its own axis (a wall rotation).
+//
+// Fillets are the thesis' bonded meta-particles (six variants, fillet_generator.hpp) with the
+// appendix-B laws of config/dem.yaml; they are dropped into the hopper in random poses from a
+// seeded generator, as an initial fill and/or at a rate, and taken out of the engine once their
+// centroid is past the discharge edge.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "fl/twin/dem/fillet_template.hpp"
+#include "fl/twin/dem/simulation.hpp"
+
+namespace fl {
+
+struct BulkSimulationConfig {
+  double sub_particle_radius_mm = 7.0;  // thesis 3..7 mm; 7 mm for speed
+  double rayleigh_fraction = 0.15;      // timestep share of the Rayleigh time (appendix B)
+  double neighbor_skin_mm = 4.0;
+  int thread_count = 1;
+  double control_step_s = 0.002;  // commands, counting and the feeder run at this step
+  std::uint64_t seed = 1;         // poses and variants of the fed fillets
+};
+
+struct BulkBeltConfig {
+  double half_width_mm = 200.0;  // 400 mm belt, as the DEM plant's
+  double start_mm = -550.0;      // upstream end (behind the hopper's back wall)
+  double discharge_mm = 900.0;   // downstream end: fillets past it are counted and removed
+  double speed_mps = 0.2;        // initial command
+  double max_speed_mps = 1.0;    // line.yaml drives.bulk.max_speed_mps
+  double side_wall_height_mm = 100.0;
+};
+
+struct BulkHopperConfig {
+  double back_mm = -400.0;       // lower edge of the back wall (the gate is the front)
+  double height_mm = 400.0;      // walls from the belt up to this
+  double back_slope_deg = 15.0;  // back wall leans outwards by this from the vertical
+  double wall_gap_mm = 3.0;      // back wall's lower edge over the belt (belt runs under it)
+};
+
+struct BulkGateConfig {
+  double x_mm = 0.0;                  // the gate's plane
+  double opening_mm = 60.0;           // line.yaml bulk.hopper_opening_mm
+  double min_opening_mm = 0.0;        // cylinder end stops
+  double max_opening_mm = 150.0;      // plant_fast.yaml hopper_max_opening_mm
+  double cylinder_speed_mmps = 50.0;  // plant_fast.yaml hopper_cylinder_speed_mmps
+};
+
+struct BulkLevellerConfig {
+  double x_mm = 500.0;           // rotor axis along the travel
+  int blades = 8;                // thesis 5.3: eight blades
+  double tip_radius_mm = 150.0;  // blade tip circle
+  double hub_radius_mm = 50.0;
+  double tip_clearance_mm = 55.0;  // lowest blade tip over the belt
+  double speed_rpm = 120.0;        // line.yaml leveller.speed_rpm; > 0 sweeps back at the belt
+  int hub_segments = 16;
+};
+
+struct BulkFeederConfig {
+  std::uint32_t initial_fill = 12;  // fillets placed in the hopper at construction
+  double rate_per_s = 0.0;          // further fillets dropped per second (0: none)
+  double drop_height_mm = 450.0;    // rate feeder drops from this height over the belt
+  double max_tilt_deg = 20.0;       // random tilt of a dropped fillet's plane
+  std::uint32_t max_fillets = 600;  // in the scene at once (the thesis ran 450)
+};
+
+struct BulkDemConfig {
+  dem::ModelSpec engine;  // config/dem.yaml (appendix B), walls and solver set by the scene
+  BulkSimulationConfig simulation;
+  BulkBeltConfig belt;
+  BulkHopperConfig hopper;
+  BulkGateConfig gate;
+  BulkLevellerConfig leveller;
+  BulkFeederConfig feeder;
+};
+
+// Defaults above with the appendix-B engine.
+BulkDemConfig default_bulk_dem_config();
+// Reads config/bulk_dem.yaml strictly (fl::YamlReader; every problem with file:line and key
+// path) and the engine file it names; throws fl::ConfigError.
+BulkDemConfig load_bulk_dem_config(const std::filesystem::path& file);
+
+struct BulkFilletView {
+  std::uint32_t id = 0;  // feed number, from 1
+  std::uint8_t variant = 0;
+  dem::Vec3 centroid_m = dem::Vec3::Zero();
+  dem::Vec3 velocity_m_per_s = dem::Vec3::Zero();
+  dem::Vec3 lower_m = dem::Vec3::Zero();  // bounding box of its spheres
+  dem::Vec3 upper_m = dem::Vec3::Zero();
+  double mass_kg = 0.0;
+  bool passed_gate = false;
+};
+
+struct BulkCounters {
+  std::uint64_t fed = 0;
+  std::uint64_t passed_gate = 0;  // centroid crossed the gate's plane downstream
+  std::uint64_t discharged = 0;   // centroid past the discharge edge (removed)
+  double discharged_mass_kg = 0.0;
+  std::uint64_t rebuilds = 0;  // engine rebuilt to take fillets out
+};
+
+// Rotor load from the contacts on the blades and hub (see leveller_load()).
+struct LevellerLoad {
+  double force_sum_n = 0.0;  // sum of the contact normal force magnitudes
+  double torque_nm = 0.0;    // about the rotor axis; > 0 opposes the commanded rotation
+  std::size_t contacts = 0;  // spheres touching the rotor
+};
+
+class BulkScene {
+ public:
+  explicit BulkScene(const BulkDemConfig& config);
+  ~BulkScene();
+  BulkScene(const BulkScene&) = delete;
+  BulkScene& operator=(const BulkScene&) = delete;
+
+  // Advances by whole control steps (rounded to the nearest).
+  void step(double seconds);
+
+  // ---- commands (take effect from the next control step)
+  void set_gate_opening_mm(double opening_mm);  // clamped to the end stops; cylinder speed
+  void set_belt_speed_mps(double speed_mps);    // clamped to +-max
+  void set_leveller_rpm(double rpm);
+  // Places one fillet: variant 0..5 (thesis_fillet_variants order), centroid, orientation.
+  std::uint32_t add_fillet(std::uint8_t variant, const dem::Vec3& centroid_m,
+                           const Eigen::Quaterniond& orientation,
+                           const dem::Vec3& velocity_m_per_s = dem::Vec3::Zero());
+  // A loose sphere of fillet material (for checks of the walls); returns its creation id.
+  std::uint32_t add_sphere(const dem::Vec3& position_m, double radius_m);
+
+  // ---- state and geometry
+  [[nodiscard]] double time_s() const;
+  [[nodiscard]] double gate_opening_mm() const;          // where the gate is now
+  [[nodiscard]] double gate_lower_edge_z_m() const;      // from the placed gate mesh
+  [[nodiscard]] double leveller_lowest_tip_z_m() const;  // lowest blade tip now
+  [[nodiscard]] double leveller_angle_rad() const;
+  [[nodiscard]] double belt_speed_mps() const { return belt_speed_mps_; }
+  [[nodiscard]] double leveller_rpm() const { return leveller_rpm_; }
+  [[nodiscard]] const dem::Simulation& simulation() const { return *sim_; }
+  [[nodiscard]] const std::vector<dem::FilletTemplate>& templates() const { return templates_; }
+  [[nodiscard]] std::vector<BulkFilletView> fillets() const;
+  [[nodiscard]] const BulkDemConfig& config() const { return config_; }
+
+  // ---- measurements
+  [[nodiscard]] const BulkCounters& counters() const { return counters_; }
+  [[nodiscard]] std::size_t fillets_in_hopper() const;  // centroid upstream of the gate
+  [[nodiscard]] std::size_t fillets_in_scene() const { return fillets_.size(); }
+  // Events per second over the last `window_s` of scene time (or since the start).
+  [[nodiscard]] double outflow_rate_per_s(double window_s) const;
+  [[nodiscard]] double mass_flow_kg_per_s(double window_s) const;
+  [[nodiscard]] double gate_pass_rate_per_s(double window_s) const;
+  // Torque proxy of the leveller: the engine reports no per-wall reaction, so the scene
+  // recomputes the Hertz normal force of every sphere overlapping a rotor triangle
+  // (F = 4/3 E* sqrt(R) overlap^1.5, the law chain's elastic part) at the end of a step.
+  [[nodiscard]] LevellerLoad leveller_load() const;
+  // Mean of leveller_load() over the control steps of the last step() call.
+  [[nodiscard]] LevellerLoad leveller_load_mean() const { return load_mean_; }
+
+ private:
+  struct Fillet {
+    std::uint32_t id = 0;
+    std::uint8_t variant = 0;
+    std::uint32_t body = 0;
+    std::uint32_t first_id = 0;    // creation id of its first sphere
+    std::uint32_t bond_begin = 0;  // its bonds are [bond_begin, + template bonds)
+    std::vector<std::uint32_t> particles;
+    dem::Vec3 centroid_m = dem::Vec3::Zero();
+    dem::Vec3 velocity_m_per_s = dem::Vec3::Zero();
+    dem::Vec3 lower_m = dem::Vec3::Zero();
+    dem::Vec3 upper_m = dem::Vec3::Zero();
+    bool passed_gate = false;
+    bool remove = false;
+  };
+  struct Event {
+    double time_s = 0.0;
+    double mass_kg = 0.0;
+  };
+
+  std::shared_ptr<const dem::Model> build_model();
+  void place_walls();
+  void control_step(double h_s);
+  void scan();
+  void count_and_remove();
+  void take_out_removed();
+  void feed(double h_s);
+  bool drop_random_fillet(const dem::Vec3& centre_m);
+  void initial_fill();
+  double uniform();  // [0, 1), portable (own bits, no std distribution)
+  [[nodiscard]] double rate(const std::vector<Event>& events, double window_s, bool mass) const;
+
+  BulkDemConfig config_;
+  std::vector<dem::FilletTemplate> templates_;
+  std::vector<std::vector<dem::BodyBond>> template_bonds_;
+  std::vector<double> template_mass_kg_;
+  std::shared_ptr<const dem::Model> model_;
+  std::unique_ptr<dem::Simulation> sim_;
+  std::vector<Fillet> fillets_;
+  std::vector<std::int32_t> fillet_of_body_;
+  std::vector<dem::Triangle> rotor_reference_;  // blades and hub, unmoved
+  std::size_t wall_belt_ = 0, wall_gate_ = 0, wall_rotor_ = 0;
+  std::uint64_t rng_state_ = 0;
+  std::uint32_t last_id_ = 0;
+  double gate_target_mm_ = 0.0;
+  double belt_speed_mps_ = 0.0;
+  double leveller_rpm_ = 0.0;
+  double feed_credit_ = 0.0;
+  double nominal_time_s_ = 0.0;  // sum of control steps; the engine's clock follows it
+  std::uint32_t pending_ = 0;    // initial fill that did not fit: dropped by the feeder
+  double pair_e_star_pa_ = 0.0;  // fillet-steel effective modulus for the torque proxy
+  BulkCounters counters_;
+  std::vector<Event> gate_events_;
+  std::vector<Event> discharge_events_;
+  LevellerLoad load_mean_;
+};
+
+// Outflow of the mailbox against its opening (the thesis' 6.1 experiment in the model): for each
+// opening a fresh scene with the same seed and fill, `settle_s` with the gate at the opening,
+// then `measure_s` counted.
+struct GateSweepOptions {
+  double settle_s = 0.5;
+  double measure_s = 2.0;
+};
+struct GateSweepPoint {
+  double opening_mm = 0.0;
+  double gate_passes_per_s = 0.0;  // fillets under the gate per second over measure_s
+  double outflow_per_s = 0.0;      // past the discharge edge per second over measure_s
+  double mass_flow_kg_per_s = 0.0;
+  std::uint64_t gate_passes = 0;
+  std::uint64_t discharged = 0;
+  double leveller_torque_nm = 0.0;  // mean over measure_s
+  double wall_s = 0.0;              // computer time of this opening
+};
+std::vector<GateSweepPoint> sweep_gate_opening(const BulkDemConfig& config,
+                                               std::span<const double> openings_mm,
+                                               const GateSweepOptions& options = {});
+// Columns opening_mm, gate_passes_per_s, outflow_per_s, mass_flow_kg_per_s, gate_passes,
+// discharged, leveller_torque_nm, wall_s (fl_report CSV); creates parent folders.
+void write_gate_sweep_csv(std::span<const GateSweepPoint> points,
+                          const std::filesystem::path& file);
+
+}  // namespace fl
