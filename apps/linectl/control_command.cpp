@@ -11,6 +11,7 @@
 #include <numbers>
 #include <thread>
 
+#include "cli_support.hpp"
 #include "duration.hpp"
 #include "fl/apps/closed_loop.hpp"
 #include "fl/controller/config_loader.hpp"
@@ -34,12 +35,6 @@ extern "C" void on_control_signal(int /*signal*/) { g_control_interrupts.fetch_a
 // 256 records, far more than the line closes in 20 ms.
 constexpr auto kDrainPeriod = std::chrono::milliseconds(20);
 
-std::filesystem::path default_config(const char* file) {
-  const std::filesystem::path source = std::filesystem::path(FL_SOURCE_DIR) / "config" / file;
-  if (std::filesystem::exists(source)) return source;
-  return std::filesystem::path("config") / file;
-}
-
 void log_control_event(const Event& event) {
   const double time_s = static_cast<double>(event.time_ns) / 1e9;
   switch (event.code) {
@@ -59,32 +54,6 @@ void log_control_event(const Event& event) {
                     event.source, event.item_id, event.value, time_s);
   }
 }
-
-// The same columns as linectl run --ledger.
-class ControlLedgerWriter {
- public:
-  explicit ControlLedgerWriter(const std::string& path) {
-    if (path.empty()) return;
-    file_.open(path);
-    if (!file_) throw std::runtime_error("--ledger " + path + ": cannot open for writing");
-    file_ << "id,created_s,closed_s,outcome,lost_reason,hand,side_seen,singulated,flip_plate1,"
-             "flip_plate2,multilane_unit,angle_at_camera1_deg,final_angle_deg,final_y_mm\n";
-  }
-  void write(const FilletRecord& r) {
-    if (!file_.is_open()) return;
-    constexpr double kDeg = 180.0 / std::numbers::pi;
-    file_ << r.id << ',' << static_cast<double>(r.created_ns) / 1e9 << ','
-          << static_cast<double>(r.closed_ns) / 1e9 << ',' << to_string(r.outcome) << ','
-          << to_string(r.lost_reason) << ',' << static_cast<int>(r.hand) << ','
-          << static_cast<int>(r.side_seen) << ',' << r.singulated << ',' << r.flip_plate1 << ','
-          << r.flip_plate2 << ',' << static_cast<int>(r.multilane_unit) << ','
-          << r.angle_at_camera1_rad * kDeg << ',' << r.final_angle_rad * kDeg << ',' << r.final_y_mm
-          << '\n';
-  }
-
- private:
-  std::ofstream file_;
-};
 
 nlohmann::json summary_json(const DistributionSummary& s) {
   return {{"count", s.count},
@@ -128,7 +97,7 @@ int control_command(const ControlArgs& args) {
   const std::filesystem::path config_file =
       args.config.empty() ? default_config("line.yaml") : std::filesystem::path(args.config);
   const LineConfig line = load_line_config(config_file);
-  ControlLedgerWriter ledger(args.ledger_path);
+  LedgerWriter ledger(args.ledger_path);
 
   const dds_domainid_t domain =
       args.domain < 0 ? DDS_DOMAIN_DEFAULT : static_cast<dds_domainid_t>(args.domain);

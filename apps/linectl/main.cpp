@@ -20,6 +20,7 @@
 #include <numbers>
 #include <thread>
 
+#include "cli_support.hpp"
 #include "dem_output.hpp"
 #include "duration.hpp"
 #include "fl/apps/closed_loop.hpp"
@@ -40,13 +41,6 @@ namespace {
 std::atomic<bool> g_interrupted{false};
 extern "C" void on_signal(int /*signal*/) { g_interrupted.store(true); }
 
-// Default configuration files: beside the sources in a build tree, else ./config.
-std::filesystem::path default_config(const char* file) {
-  const std::filesystem::path source = std::filesystem::path(FL_SOURCE_DIR) / "config" / file;
-  if (std::filesystem::exists(source)) return source;
-  return std::filesystem::path("config") / file;
-}
-
 struct RunArgs {
   std::string plant = "fast";
   std::string duration = "60s";
@@ -64,18 +58,10 @@ struct RunArgs {
   double frame_every_s = 0.04;
 };
 
-std::unique_ptr<Plant> make_plant(const RunArgs& args, const LineConfig& line) {
-  if (args.plant == "fast") {
-    return std::make_unique<FastPlant>(line, load_fast_plant_config(args.plant_config));
-  }
-  if (args.plant == "dem") {
-    // --plant-config names the fast plant's file by default: the DEM plant reads its own.
-    const std::filesystem::path file = args.plant_config == default_config("plant_fast.yaml")
-                                           ? default_config("plant_dem.yaml")
-                                           : std::filesystem::path(args.plant_config);
-    return std::make_unique<DemPlant>(line, load_dem_plant_config(file));
-  }
-  throw std::runtime_error("--plant " + args.plant + ": unknown plant (choose fast or dem)");
+std::unique_ptr<Plant> make_run_plant(const RunArgs& args, const LineConfig& line) {
+  // --plant-config names the fast plant's file by default: the DEM plant reads its own.
+  const bool default_file = args.plant_config == default_config("plant_fast.yaml");
+  return make_plant(args.plant, default_file ? std::string() : args.plant_config, line);
 }
 
 // Progress on stderr: a redrawn line on a terminal, a log line every 10 % otherwise.
@@ -132,31 +118,6 @@ void log_event(const Event& event) {
                    static_cast<double>(event.time_ns) / 1e9);
   }
 }
-
-class LedgerWriter {
- public:
-  explicit LedgerWriter(const std::string& path) {
-    if (path.empty()) return;
-    file_.open(path);
-    if (!file_) throw std::runtime_error("--ledger " + path + ": cannot open for writing");
-    file_ << "id,created_s,closed_s,outcome,lost_reason,hand,side_seen,singulated,flip_plate1,"
-             "flip_plate2,multilane_unit,angle_at_camera1_deg,final_angle_deg,final_y_mm\n";
-  }
-  void write(const FilletRecord& r) {
-    if (!file_.is_open()) return;
-    constexpr double kDeg = 180.0 / std::numbers::pi;
-    file_ << r.id << ',' << static_cast<double>(r.created_ns) / 1e9 << ','
-          << static_cast<double>(r.closed_ns) / 1e9 << ',' << to_string(r.outcome) << ','
-          << to_string(r.lost_reason) << ',' << static_cast<int>(r.hand) << ','
-          << static_cast<int>(r.side_seen) << ',' << r.singulated << ',' << r.flip_plate1 << ','
-          << r.flip_plate2 << ',' << static_cast<int>(r.multilane_unit) << ','
-          << r.angle_at_camera1_rad * kDeg << ',' << r.final_angle_rad * kDeg << ',' << r.final_y_mm
-          << '\n';
-  }
-
- private:
-  std::ofstream file_;
-};
 
 Kpis run_realtime(const RunArgs& args, const LineConfig& line, Plant& plant, double duration_s,
                   Progress& progress, LedgerWriter& ledger) {
@@ -225,7 +186,7 @@ int run_command(const RunArgs& args) {
     return 2;
   }
   const LineConfig line = load_line_config(args.config);
-  std::unique_ptr<Plant> plant = make_plant(args, line);
+  std::unique_ptr<Plant> plant = make_run_plant(args, line);
   spdlog::info("closed loop against the {} plant: {} s of feeding, seed {}, config {}",
                plant->name(), *duration_s, args.seed, args.config);
   Progress progress(args.quiet);

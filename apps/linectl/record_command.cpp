@@ -10,6 +10,7 @@
 #include <memory>
 #include <sstream>
 
+#include "cli_support.hpp"
 #include "duration.hpp"
 #include "fl/controller/config_loader.hpp"
 #include "fl/controller/line_controller.hpp"
@@ -31,12 +32,6 @@ constexpr double kNsPerS = 1e9;
 // Fillets whose centre lies farther than this outside a camera's field along travel cannot
 // reach into the frame (the longest fillet of table 3.1 is 176 mm, at most 1.05 scaled).
 constexpr double kRenderMarginMm = 100.0;
-
-std::filesystem::path default_config(const char* file) {
-  const std::filesystem::path source = std::filesystem::path(FL_SOURCE_DIR) / "config" / file;
-  if (std::filesystem::exists(source)) return source;
-  return std::filesystem::path("config") / file;
-}
 
 std::string read_text(const std::filesystem::path& file) {
   std::ifstream in(file);
@@ -135,24 +130,11 @@ struct CameraRig {
   CameraFrame delivered{};
 };
 
-std::unique_ptr<Plant> make_record_plant(const RecordArgs& args, const LineConfig& line) {
-  if (args.plant == "fast") {
-    const std::filesystem::path file = args.plant_config.empty()
-                                           ? default_config("plant_fast.yaml")
-                                           : std::filesystem::path(args.plant_config);
-    return std::make_unique<FastPlant>(line, load_fast_plant_config(file));
-  }
-  const std::filesystem::path file = args.plant_config.empty()
-                                         ? default_config("plant_dem.yaml")
-                                         : std::filesystem::path(args.plant_config);
-  return std::make_unique<DemPlant>(line, load_dem_plant_config(file));
-}
-
 int record_twin(const RecordArgs& args, double duration_s) {
   const std::filesystem::path config_file =
       args.config.empty() ? default_config("line.yaml") : std::filesystem::path(args.config);
   const LineConfig line = load_line_config(config_file);
-  std::unique_ptr<Plant> plant = make_record_plant(args, line);
+  std::unique_ptr<Plant> plant = make_plant(args.plant, args.plant_config, line);
   auto renderer = std::make_shared<render::FilletRenderer>();
 
   rec::WriterSettings settings;

@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
+#include "cli_support.hpp"
 #include "duration.hpp"
 #include "fl/apps/closed_loop.hpp"
 #include "fl/controller/config_loader.hpp"
@@ -59,28 +60,6 @@ void sleep_until(std::int64_t time_ns) {
   while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
     if (g_twin_interrupted.load()) return;
   }
-}
-
-std::filesystem::path default_config(const char* file) {
-  const std::filesystem::path source = std::filesystem::path(FL_SOURCE_DIR) / "config" / file;
-  if (std::filesystem::exists(source)) return source;
-  return std::filesystem::path("config") / file;
-}
-
-std::unique_ptr<Plant> make_twin_plant(const TwinServeArgs& args, const LineConfig& line) {
-  if (args.plant == "fast") {
-    const std::filesystem::path file = args.plant_config.empty()
-                                           ? default_config("plant_fast.yaml")
-                                           : std::filesystem::path(args.plant_config);
-    return std::make_unique<FastPlant>(line, load_fast_plant_config(file));
-  }
-  if (args.plant == "dem") {
-    const std::filesystem::path file = args.plant_config.empty()
-                                           ? default_config("plant_dem.yaml")
-                                           : std::filesystem::path(args.plant_config);
-    return std::make_unique<DemPlant>(line, load_dem_plant_config(file));
-  }
-  throw std::runtime_error("--plant " + args.plant + ": unknown plant (choose fast or dem)");
 }
 
 bool any_drive_enabled(const OutputImage& out) {
@@ -144,7 +123,7 @@ int twin_serve_command(const TwinServeArgs& args) {
   const std::filesystem::path config_file =
       args.config.empty() ? default_config("line.yaml") : std::filesystem::path(args.config);
   const LineConfig line = load_line_config(config_file);
-  std::unique_ptr<Plant> plant = make_twin_plant(args, line);
+  std::unique_ptr<Plant> plant = make_plant(args.plant, args.plant_config, line);
 
   const dds_domainid_t domain =
       args.domain < 0 ? DDS_DOMAIN_DEFAULT : static_cast<dds_domainid_t>(args.domain);
