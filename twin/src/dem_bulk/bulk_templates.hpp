@@ -1,5 +1,5 @@
 // The six thesis fillet templates at one sub-particle radius. Its own translation unit: the
-// fillet generator's mesh header and the engine's model header both declare dem::Triangle.
+// generator stays out of the scene's other translation units.
 #pragma once
 
 #include <vector>

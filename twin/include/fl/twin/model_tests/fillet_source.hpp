@@ -1,6 +1,5 @@
-// Fillet meta-particles for the model tests, kept apart from the engine headers: the mesh
-// header's dem::Triangle (vertex indices) and the engine's dem::Triangle (a wall triangle)
-// cannot be seen by one translation unit, so this header forward-declares the mesh.
+// Fillet meta-particles for the model tests. The header forward-declares the mesh so that
+// the tests' headers stay free of the generator's.
 #pragma once
 
 #include <cstddef>
