@@ -132,8 +132,12 @@ struct UnitCommand {
   float right_mps = 0.0F;
 };
 // Differential speeds that turn the item toward its target within the drives' limits.
+// turn_gain: the share of the belts' rotation (differential over track) the item follows,
+// as the station estimates it online; 1 is the rigid-rolling model. blind_s: how long a
+// change in the item's rate can go unseen before the command reacts to the camera (0: the
+// heading is known continuously).
 UnitCommand orient_command(const MultilaneConfig& config, const DriveLimits& limits,
-                           float error_rad);
+                           float error_rad, float turn_gain = 1.0F, float blind_s = 0.0F);
 
 class MultilaneStation {
  public:
@@ -148,10 +152,18 @@ class MultilaneStation {
   // Which unit carries line position s, or -1.
   [[nodiscard]] int unit_at(float s_mm) const;
   [[nodiscard]] std::uint32_t controlled_item(std::size_t unit) const { return controlled_[unit]; }
+  // Rotation items make between unit 2 and the final camera, towards more turned (learnt).
+  [[nodiscard]] float transfer_bias_rad() const { return transfer_bias_rad_; }
 
  private:
   static constexpr std::size_t kHistory = 64;  // 0.64 s of scans, longer than any latency
   void assign(const ScanContext& ctx);
+  // Updates the item's turn gain from its new frame and the previous one on the same unit.
+  void learn_turn_gain(Item& item, std::size_t unit, float since_exposure_rad) const;
+  // Learns the transfer bias from an item's first frame at the final camera.
+  void learn_transfer_bias(Item& item);
+  // The heading the units aim at: the target less the rotation still to come after them.
+  [[nodiscard]] float aim_rad(const Item& item) const;
   const LineConfig& config_;
   std::array<float, kUnits> rotation_rad_{};
   std::array<std::array<float, kHistory>, kUnits> rotation_history_{};
@@ -159,6 +171,7 @@ class MultilaneStation {
   std::size_t history_head_ = 0;
   std::size_t history_size_ = 0;
   std::array<std::uint32_t, kUnits> controlled_{};
+  float transfer_bias_rad_ = 0.0F;
 };
 
 // --- 9. Squeeze roller: down only behind the thickest section.

@@ -73,6 +73,21 @@ struct Item {
   std::int8_t multilane_unit = -1;
   bool orienting_done = false;
   float target_angle_rad = 0.0F;
+  // The multilane angle loop's estimate of how much of the encoders' rotation the item
+  // really turns (friction, slip, heading), learnt from successive frames on a unit: a
+  // recursive least-squares fit of measured over encoder rotation. 0 weight: nothing
+  // learnt yet, the loop starts from the model (gain 1).
+  float turn_gain = 1.0F;
+  float turn_gain_weight_rad2 = 0.0F;  // sum of squared encoder rotations (with forgetting)
+  float turn_gain_sum_rad2 = 0.0F;     // sum of encoder times measured rotation
+  // The previous multilane frame (angle, exposure, unit), the start of the next gain sample.
+  float gain_frame_angle_rad = 0.0F;
+  std::int64_t gain_frame_ns = 0;
+  std::int8_t gain_frame_unit = -1;
+  // The heading the units left it at (estimate on unit 2), until the final camera has
+  // compared it with what it sees: the rotation on the way there.
+  float exit_angle_rad = 0.0F;
+  bool exit_angle_known = false;
   // Newest angle measurement, for the multilane loop (latency compensated there).
   float measured_angle_rad = 0.0F;
   std::int64_t measured_angle_ns = 0;
