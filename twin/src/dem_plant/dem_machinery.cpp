@@ -245,7 +245,11 @@ void DemPlant::apply_events(const OutputImage& out) {
     }
     f.previous_s_m = s_m;
   }
-  if (moved) sim_->prepare();
+  if (moved) {
+    sim_->prepare();
+    // prepare() may re-order the particles by cell: the fillets' particle indices are stale
+    scan_particles();
+  }
   take_out_removed();
 }
 

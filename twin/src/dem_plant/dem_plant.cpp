@@ -333,6 +333,11 @@ DemPlant::Pose DemPlant::fit_pose(const Fillet& fillet) const {
   Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
   for (const std::uint32_t k : fillet.particles) {
     const std::uint32_t i = s.id[k] - fillet.first_id;
+    if (k >= s.size() || i >= t.positions_m.size()) {
+      // an invariant, not input: particle indices read after a re-order without a rescan
+      throw std::logic_error("dem plant: fillet " + std::to_string(fillet.plant_id) +
+                             " holds a stale particle index");
+    }
     h += t.positions_m[i] * (s.position_m[k] - fillet.centroid_m).transpose();
   }
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
