@@ -37,10 +37,12 @@ struct ThreadTally {  // per-thread sums, reduced in thread order
 
 // Applies a permutation (new index n takes old index order[n]) using a scratch vector of the
 // same capacity, then swaps: no allocation once both have their capacity.
+// values becomes values[order[0]], values[order[1]], ... (stride elements per index): a
+// permutation when order holds every index once, a compaction when it holds a subset.
 template <typename T>
-void permute(std::vector<T>& values, std::vector<T>& scratch,
-             const std::vector<std::uint32_t>& order, std::size_t stride = 1) {
-  scratch.resize(values.size());
+void gather(std::vector<T>& values, std::vector<T>& scratch,
+            const std::vector<std::uint32_t>& order, std::size_t stride = 1) {
+  scratch.resize(order.size() * stride);
   for (std::size_t n = 0; n < order.size(); ++n) {
     for (std::size_t s = 0; s < stride; ++s) {
       scratch[n * stride + s] = values[order[n] * stride + s];
@@ -408,22 +410,22 @@ void Simulation::sort_particles() {
   const std::size_t n = s.size();
   // m.order holds old indices in cell order (from the binning in rebuild_neighbors)
   for (std::size_t k = 0; k < n; ++k) m.new_of_old[m.order[k]] = static_cast<std::uint32_t>(k);
-  permute(s.position_m, m.scratch_vec3, m.order);
-  permute(s.velocity_m_per_s, m.scratch_vec3, m.order);
-  permute(s.angular_velocity_rad_per_s, m.scratch_vec3, m.order);
-  permute(s.force_n, m.scratch_vec3, m.order);
-  permute(s.torque_nm, m.scratch_vec3, m.order);
-  permute(m.build_position_m, m.scratch_vec3, m.order);
-  permute(s.radius_m, m.scratch_double, m.order);
-  permute(s.inverse_mass_per_kg, m.scratch_double, m.order);
-  permute(s.inverse_inertia_per_kg_m2, m.scratch_double, m.order);
-  permute(s.type, m.scratch_u32, m.order);
-  permute(s.body, m.scratch_u32, m.order);
-  permute(s.id, m.scratch_u32, m.order);
-  permute(m.particle_cell, m.scratch_u32, m.order);
-  for (auto& states : m.plane_states) permute(states, m.scratch_states, m.order);
-  for (auto& slots : m.mesh_slots) permute(slots, m.scratch_slots, m.order, kMeshSlots);
-  permute(m.wall_history, m.scratch_u64, m.order);
+  gather(s.position_m, m.scratch_vec3, m.order);
+  gather(s.velocity_m_per_s, m.scratch_vec3, m.order);
+  gather(s.angular_velocity_rad_per_s, m.scratch_vec3, m.order);
+  gather(s.force_n, m.scratch_vec3, m.order);
+  gather(s.torque_nm, m.scratch_vec3, m.order);
+  gather(m.build_position_m, m.scratch_vec3, m.order);
+  gather(s.radius_m, m.scratch_double, m.order);
+  gather(s.inverse_mass_per_kg, m.scratch_double, m.order);
+  gather(s.inverse_inertia_per_kg_m2, m.scratch_double, m.order);
+  gather(s.type, m.scratch_u32, m.order);
+  gather(s.body, m.scratch_u32, m.order);
+  gather(s.id, m.scratch_u32, m.order);
+  gather(m.particle_cell, m.scratch_u32, m.order);
+  for (auto& states : m.plane_states) gather(states, m.scratch_states, m.order);
+  for (auto& slots : m.mesh_slots) gather(slots, m.scratch_slots, m.order, kMeshSlots);
+  gather(m.wall_history, m.scratch_u64, m.order);
   for (Bond& bond : s.bonds) {
     bond.i = m.new_of_old[bond.i];
     bond.j = m.new_of_old[bond.j];
@@ -434,6 +436,84 @@ void Simulation::sort_particles() {
   }
   m.partners_valid = false;
   ++stats_.particle_sorts;
+}
+
+std::size_t Simulation::remove_bodies(std::span<const std::uint32_t> bodies) {
+  Impl& m = *impl_;
+  State& s = state_;
+  // Bring the neighbour list and wall history up to the particles added since, so that
+  // every per-particle array is compacted alike.
+  if (!m.prepared && s.size() > 0) prepare();
+  const std::size_t n = s.size();
+  std::vector<bool> removed_body(m.next_body, false);
+  for (const std::uint32_t body : bodies) {
+    if (body < removed_body.size()) removed_body[body] = true;
+  }
+  // The kept particles in their current order: a compaction with the permutation machinery.
+  std::vector<std::uint32_t> kept;
+  kept.reserve(n);
+  constexpr std::uint32_t kGone = std::numeric_limits<std::uint32_t>::max();
+  std::vector<std::uint32_t> new_index(n, kGone);
+  for (std::size_t k = 0; k < n; ++k) {
+    if (removed_body[s.body[k]]) continue;
+    new_index[k] = static_cast<std::uint32_t>(kept.size());
+    kept.push_back(static_cast<std::uint32_t>(k));
+  }
+  const std::size_t removed = n - kept.size();
+  if (removed == 0) return 0;
+
+  gather(s.position_m, m.scratch_vec3, kept);
+  gather(s.velocity_m_per_s, m.scratch_vec3, kept);
+  gather(s.angular_velocity_rad_per_s, m.scratch_vec3, kept);
+  gather(s.force_n, m.scratch_vec3, kept);
+  gather(s.torque_nm, m.scratch_vec3, kept);
+  gather(s.radius_m, m.scratch_double, kept);
+  gather(s.inverse_mass_per_kg, m.scratch_double, kept);
+  gather(s.inverse_inertia_per_kg_m2, m.scratch_double, kept);
+  gather(s.type, m.scratch_u32, kept);
+  gather(s.body, m.scratch_u32, kept);
+  gather(s.id, m.scratch_u32, kept);
+  gather(m.build_position_m, m.scratch_vec3, kept);
+  gather(m.particle_cell, m.scratch_u32, kept);
+  for (auto& states : m.plane_states) gather(states, m.scratch_states, kept);
+  for (auto& slots : m.mesh_slots) gather(slots, m.scratch_slots, kept, kMeshSlots);
+  gather(m.wall_history, m.scratch_u64, kept);
+  // Contact history between kept particles survives: the neighbour list is compacted and
+  // its active pairs are carried into the rebuild that prepare() does.
+  std::vector<std::uint32_t> offsets(kept.size() + 1, 0);
+  std::vector<std::uint32_t> pair_j;
+  std::vector<PairState> pair_states;
+  if (m.pair_offsets.size() == n + 1) {
+    for (std::size_t k = 0; k < kept.size(); ++k) {
+      const std::uint32_t old_i = kept[k];
+      for (std::uint32_t p = m.pair_offsets[old_i]; p < m.pair_offsets[old_i + 1]; ++p) {
+        const std::uint32_t j = new_index[m.pair_j[p]];
+        if (j == kGone) continue;
+        pair_j.push_back(j);
+        pair_states.push_back(m.pair_states[p]);
+      }
+      offsets[k + 1] = static_cast<std::uint32_t>(pair_j.size());
+    }
+  }
+  m.pair_offsets.swap(offsets);
+  m.pair_j.swap(pair_j);
+  m.pair_states.swap(pair_states);
+  // Bonds keep their order; those with a removed end go with it.
+  std::size_t kept_bonds = 0;
+  for (std::size_t b = 0; b < s.bonds.size(); ++b) {
+    Bond bond = s.bonds[b];
+    bond.i = new_index[bond.i];
+    bond.j = new_index[bond.j];
+    if (bond.i == kGone || bond.j == kGone) continue;
+    s.bonds[kept_bonds] = bond;
+    s.bond_states[kept_bonds] = s.bond_states[b];
+    ++kept_bonds;
+  }
+  s.bonds.resize(kept_bonds);
+  s.bond_states.resize(kept_bonds);
+  m.carried.clear();
+  prepare();  // threads, bond laws and the neighbour list for the smaller system
+  return removed;
 }
 
 void Simulation::rebuild_neighbors() {

@@ -400,7 +400,6 @@ std::uint32_t DemPlant::add_fillet(std::uint8_t variant, SideUp side,
   }
   pose.velocity_m_per_s = Vec3(v_mps, 0.0, 0.0);
   const std::size_t first = sim_->state().size();
-  const std::size_t bond_begin = sim_->state().bonds.size();
   const std::uint32_t body =
       sim_->add_body(t.positions_m, t.radii_m, t.types, template_bonds_[variant], pose);
   Fillet f;
@@ -409,7 +408,6 @@ std::uint32_t DemPlant::add_fillet(std::uint8_t variant, SideUp side,
   f.variant = variant;
   f.body = body;
   f.first_id = sim_->state().id[first];
-  f.bond_begin = static_cast<std::uint32_t>(bond_begin);
   f.centroid_m = centroid_m;
   f.previous_s_m = centroid_m.x();
   f.progress_s_m = centroid_m.x();
@@ -487,50 +485,16 @@ void DemPlant::record_exit(const Fillet& fillet, TrueExit exit) {
 }
 
 void DemPlant::take_out_removed() {
-  if (std::none_of(fillets_.begin(), fillets_.end(), [](const Fillet& f) { return f.remove; })) {
-    return;
+  std::vector<std::uint32_t> bodies;
+  for (const Fillet& f : fillets_) {
+    if (f.remove) bodies.push_back(f.body);
   }
-  // The engine has no removal: a fresh simulation takes the remaining fillets over with their
-  // positions, velocities, spins, bond rest lengths and bond states (contact history restarts,
-  // a small perturbation), and the walls' states.
-  const dem::State& old = sim_->state();
-  auto fresh = std::make_unique<dem::Simulation>(model_);
-  fresh->reserve(old.size(), old.bonds.size());
-  std::vector<Fillet> kept;
-  kept.reserve(fillets_.size());
-  std::vector<std::uint32_t> old_index;
-  for (Fillet& f : fillets_) {
-    if (f.remove) continue;
-    const dem::FilletTemplate& t = templates_[f.variant];
-    old_index.assign(t.positions_m.size(), 0);
-    for (const std::uint32_t k : f.particles) old_index[old.id[k] - f.first_id] = k;
-    const std::size_t first = fresh->state().size();
-    const std::size_t bond_begin = fresh->state().bonds.size();
-    const std::uint32_t body =
-        fresh->add_body(t.positions_m, t.radii_m, t.types, template_bonds_[f.variant], {});
-    dem::State& s = fresh->mutable_state();
-    for (std::size_t i = 0; i < t.positions_m.size(); ++i) {
-      s.position_m[first + i] = old.position_m[old_index[i]];
-      s.velocity_m_per_s[first + i] = old.velocity_m_per_s[old_index[i]];
-      s.angular_velocity_rad_per_s[first + i] = old.angular_velocity_rad_per_s[old_index[i]];
-    }
-    for (std::size_t b = 0; b < t.bonds.size(); ++b) {
-      s.bonds[bond_begin + b].rest_length_m = old.bonds[f.bond_begin + b].rest_length_m;
-      s.bond_states[bond_begin + b] = old.bond_states[f.bond_begin + b];
-    }
-    f.body = body;
-    f.first_id = s.id[first];
-    f.bond_begin = static_cast<std::uint32_t>(bond_begin);
-    kept.push_back(std::move(f));
-  }
-  dem::State& s = fresh->mutable_state();
-  s.walls = old.walls;
-  s.time_s = old.time_s;
-  s.step = old.step;
-  sim_ = std::move(fresh);
-  sim_->prepare();
-  fillets_ = std::move(kept);
-  fillet_of_body_.assign(fillets_.empty() ? 0 : fillets_.back().body + 1, -1);
+  if (bodies.empty()) return;
+  sim_->remove_bodies(bodies);
+  std::erase_if(fillets_, [](const Fillet& f) { return f.remove; });
+  std::uint32_t body_end = 0;
+  for (const Fillet& f : fillets_) body_end = std::max(body_end, f.body + 1);
+  fillet_of_body_.assign(body_end, -1);
   for (std::size_t f = 0; f < fillets_.size(); ++f) {
     fillet_of_body_[fillets_[f].body] = static_cast<std::int32_t>(f);
   }

@@ -96,6 +96,11 @@ class Simulation {
   std::uint32_t add_body(std::span<const Vec3> positions_m, std::span<const double> radii_m,
                          std::span<const std::uint8_t> types, std::span<const BodyBond> bonds,
                          const BodyPose& pose);
+  // Takes the particles of the given bodies (add_body/add_sphere numbers; unknown ones are
+  // ignored) and their bonds out of the run. The others keep their state, bond states and
+  // contact history; body numbers and ids stay, particle and bond indices shift down.
+  // Returns the number of particles removed.
+  std::size_t remove_bodies(std::span<const std::uint32_t> bodies);
   // Builds the neighbour list and the first forces; step() calls it when needed.
   void prepare();
 

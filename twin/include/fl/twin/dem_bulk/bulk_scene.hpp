@@ -172,8 +172,6 @@ class BulkScene {
     std::uint32_t id = 0;
     std::uint8_t variant = 0;
     std::uint32_t body = 0;
-    std::uint32_t first_id = 0;    // creation id of its first sphere
-    std::uint32_t bond_begin = 0;  // its bonds are [bond_begin, + template bonds)
     std::vector<std::uint32_t> particles;
     dem::Vec3 centroid_m = dem::Vec3::Zero();
     dem::Vec3 velocity_m_per_s = dem::Vec3::Zero();

@@ -133,7 +133,6 @@ class DemPlant final : public Plant {
     std::uint8_t variant = 0;
     std::uint32_t body = 0;      // engine body number
     std::uint32_t first_id = 0;  // engine id of template sphere 0
-    std::uint32_t bond_begin = 0;
     bool fed = false;
     bool squeezed_ok = false;
     bool thick_passed_roller = false;
