@@ -1,0 +1,287 @@
+// Loading measured datasets: the example loads in SI; every malformed manifest, file, column,
+// unit and value is reported with its file, line and column, and nothing partial is returned.
+#include "fl/workbench/dataset.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <string>
+
+namespace fl::workbench {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A dataset folder written by the test, removed afterwards.
+class DatasetFolder {
+ public:
+  DatasetFolder() {
+    path_ = fs::temp_directory_path() /
+            ("fl_workbench_" +
+             std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~DatasetFolder() { fs::remove_all(path_); }
+  DatasetFolder(const DatasetFolder&) = delete;
+  DatasetFolder& operator=(const DatasetFolder&) = delete;
+
+  void write(const std::string& name, const std::string& text) const {
+    std::ofstream(path_ / name, std::ios::binary) << text;
+  }
+  [[nodiscard]] const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::string manifest(const std::string& experiment, const std::string& conditions,
+                     const std::string& trials) {
+  return "format: fillet-measurements/1\nname: test\nexperiment: " + experiment + "\n" +
+         conditions + "trials:\n" + trials;
+}
+
+const std::string kOneTrial = "  - id: a\n    file: a.csv\n";
+const std::string kRate = "conditions:\n  rate: 1 mm/s\n";
+
+// The problems of loading `folder`; fails the test when it loads.
+std::vector<DatasetProblem> problems_of(const fs::path& folder) {
+  try {
+    (void)load_dataset(folder);
+  } catch (const DatasetError& error) {
+    return error.problems();
+  }
+  ADD_FAILURE() << folder << " loaded, a problem was expected";
+  return {};
+}
+
+// True when some problem is in `file_suffix` at `line` (0: any) and says `fragment`.
+::testing::AssertionResult has_problem(const std::vector<DatasetProblem>& problems,
+                                       const std::string& file_suffix, int line,
+                                       const std::string& fragment) {
+  std::string all;
+  for (const DatasetProblem& p : problems) {
+    all += "\n  " + p.to_string();
+    const bool file_ok =
+        p.file.size() >= file_suffix.size() &&
+        p.file.compare(p.file.size() - file_suffix.size(), file_suffix.size(), file_suffix) == 0;
+    if (file_ok && (line == 0 || p.line == line) && p.message.find(fragment) != std::string::npos) {
+      return ::testing::AssertionSuccess();
+    }
+  }
+  return ::testing::AssertionFailure() << "no problem in " << file_suffix << ":" << line
+                                       << " saying '" << fragment << "'; got:" << all;
+}
+
+TEST(Dataset, ExampleLoadsInSiUnits) {
+  const Dataset data = load_dataset(fs::path(FL_WORKBENCH_TEST_DATA) / "compress_example");
+  EXPECT_EQ(data.experiment, ExperimentType::kCompress);
+  EXPECT_EQ(data.name, "compress example");
+  ASSERT_EQ(data.trials.size(), 2U);
+  const Trial& slow = data.trials[0];
+  ASSERT_EQ(slow.data.rows(), 4U);
+  // 3 mm at line 6 of the file (a comment and the header come first).
+  EXPECT_DOUBLE_EQ(slow.data.at("displacement").values_si[3], 3e-3);
+  EXPECT_EQ(slow.data.lines[3], 6);
+  EXPECT_EQ(slow.data.at("force").unit.symbol, "N");
+  // 1 mm/s from the dataset's conditions; the fast trial overrides it with 5 mm/s.
+  EXPECT_DOUBLE_EQ(std::get<double>(slow.conditions.at("rate")), 1e-3);
+  const Trial& fast = data.trials[1];
+  EXPECT_DOUBLE_EQ(std::get<double>(fast.conditions.at("rate")), 5e-3);
+  EXPECT_DOUBLE_EQ(std::get<double>(fast.conditions.at("hold")), 2.0);
+  EXPECT_EQ(std::get<std::string>(fast.conditions.at("variant")), "172x72x32");
+  // The fast file is in milliseconds with CRLF line ends: 2400 ms is 2.4 s.
+  EXPECT_DOUBLE_EQ(fast.data.at("time").values_si.back(), 2.4);
+  EXPECT_DOUBLE_EQ(data.noise_si.at("force"), 0.02);
+  EXPECT_DOUBLE_EQ(data.noise_si.at("displacement"), 10e-6);
+  EXPECT_THROW((void)slow.data.at("torque"), std::out_of_range);
+}
+
+TEST(Dataset, MissingFolderOrManifest) {
+  EXPECT_TRUE(
+      has_problem(problems_of("/nonexistent/dataset"), "/nonexistent/dataset", 0, "not a folder"));
+  const DatasetFolder folder;
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 0, "cannot"));
+}
+
+TEST(Dataset, ManifestProblemsNameTheLine) {
+  const DatasetFolder folder;
+  // Line 1 format, 3 experiment; all problems at once.
+  folder.write("manifest.yaml",
+               "format: fillet-measurements/2\nname: x\nexperiment: compression\n"
+               "trials:\n" +
+                   kOneTrial);
+  const auto problems = problems_of(folder.path());
+  EXPECT_TRUE(has_problem(problems, "manifest.yaml", 1, "is not fillet-measurements/1"));
+  EXPECT_TRUE(has_problem(problems, "manifest.yaml", 3, "'compression' is not one of slide"));
+}
+
+TEST(Dataset, ConditionsNeedTheirQuantityAndRange) {
+  const DatasetFolder folder;
+  folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,0,0\n");
+  // Line 5: a force where a speed belongs; line 6: a bare number; line 7: a typo'd key.
+  folder.write(
+      "manifest.yaml",
+      manifest("compress", "conditions:\n  rate: 2 N\n  hold: 3\n  rat: 1 mm/s\n  surface: damp\n",
+               kOneTrial));
+  const auto problems = problems_of(folder.path());
+  EXPECT_TRUE(has_problem(problems, "manifest.yaml", 5, "'2 N' is not a speed"));
+  EXPECT_TRUE(has_problem(problems, "manifest.yaml", 6, "'3' is not a time"));
+  EXPECT_TRUE(has_problem(problems, "manifest.yaml", 7, "unknown key"));
+  EXPECT_TRUE(has_problem(problems, "manifest.yaml", 8, "'damp' is not one of dry, wet"));
+}
+
+TEST(Dataset, RequiredConditionMayComeFromEitherLevelButMustCome) {
+  const DatasetFolder folder;
+  folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,0,0\n");
+  folder.write("manifest.yaml", manifest("compress", "", kOneTrial));
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 0,
+                          "trial 'a' has no condition 'rate'"));
+  folder.write("manifest.yaml",
+               manifest("compress", "", kOneTrial + "    conditions:\n      rate: 2 mm/s\n"));
+  EXPECT_NO_THROW((void)load_dataset(folder.path()));
+  // 2 m/s is beyond the 1 m/s a compression test machine reaches: out of range.
+  folder.write("manifest.yaml", manifest("compress", "conditions:\n  rate: 2 m/s\n", kOneTrial));
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 5, "out of range"));
+}
+
+TEST(Dataset, DuplicateTrialIdsAndNoTrials) {
+  const DatasetFolder folder;
+  folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,0,0\n");
+  folder.write("manifest.yaml", manifest("compress", kRate, kOneTrial + kOneTrial));
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 0, "used twice"));
+  folder.write("manifest.yaml", manifest("compress", kRate, "  []\n"));
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 0, "no trials"));
+}
+
+TEST(Dataset, HeaderProblems) {
+  const DatasetFolder folder;
+  folder.write("manifest.yaml", manifest("compress", kRate, kOneTrial));
+  const auto header = [&](const std::string& line) {
+    folder.write("a.csv", line + "\n0,0,0\n");
+    return problems_of(folder.path());
+  };
+  EXPECT_TRUE(has_problem(header("time [s],displacement,force [N]"), "a.csv", 1,
+                          "'displacement' has no unit"));
+  EXPECT_TRUE(has_problem(header("time [s],displacement [mm],force [lbf]"), "a.csv", 1,
+                          "unknown unit 'lbf' (a force: use one of N, mN, kN)"));
+  EXPECT_TRUE(has_problem(header("time [s],displacement [N],force [N]"), "a.csv", 1,
+                          "'N' is a unit of force, the column is a length"));
+  EXPECT_TRUE(has_problem(header("time [s],displacement [mm],forse [N]"), "a.csv", 1,
+                          "unknown column 'forse'"));
+  EXPECT_TRUE(
+      has_problem(header("time [s],displacement [mm],time [s]"), "a.csv", 1, "appears twice"));
+  EXPECT_TRUE(has_problem(header("time [s],displacement [mm]"), "a.csv", 1,
+                          "required column 'force' is missing"));
+}
+
+TEST(Dataset, CellProblemsNameLineAndColumn) {
+  const DatasetFolder folder;
+  folder.write("manifest.yaml", manifest("compress", kRate, kOneTrial));
+  // Line 3: text; 4: NaN; 5: short row; 6: an empty cell; 8: time going back; 9: 5 m of
+  // displacement (a file written in m where mm was meant), beyond the 0.2 m range.
+  folder.write("a.csv",
+               "time [s],displacement [mm],force [N]\n0,0,0\n1,abc,0\n2,0,nan\n3,0\n4,,0\n"
+               "5,0,0\n4.5,0,0\n6,5000,0\n");
+  const auto problems = problems_of(folder.path());
+  EXPECT_TRUE(has_problem(problems, "a.csv", 3, "displacement: 'abc' is not a number"));
+  EXPECT_TRUE(has_problem(problems, "a.csv", 4, "force: 'nan' is not finite"));
+  EXPECT_TRUE(has_problem(problems, "a.csv", 5, "2 fields, the header has 3"));
+  EXPECT_TRUE(has_problem(problems, "a.csv", 6, "empty cell"));
+  EXPECT_TRUE(has_problem(problems, "a.csv", 9, "5000 mm is out of range [-200 mm, 200 mm]"));
+  EXPECT_TRUE(has_problem(problems, "a.csv", 8, "does not increase (line 7 had 5 s)"));
+  for (const DatasetProblem& p : problems) {
+    if (p.line == 3) {
+      EXPECT_EQ(p.column, 2);  // the displacement field
+    }
+  }
+}
+
+TEST(Dataset, FileProblems) {
+  const DatasetFolder folder;
+  folder.write("manifest.yaml", manifest("compress", kRate, kOneTrial));
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "a.csv", 0, "cannot open"));
+  folder.write("a.csv", "");
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "a.csv", 0, "no header row"));
+  folder.write("a.csv", "time [s],displacement [mm],force [N]\n");
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "a.csv", 1, "no data rows"));
+  folder.write("a.csv", std::string("time [s],displacement [mm],force [N]\n0,0\0,0\n", 44));
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "a.csv", 2, "binary data"));
+  folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,\"0,0\n");
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "a.csv", 2, "not closed"));
+}
+
+TEST(Dataset, EveryBrokenFileIsReportedAndTheListIsCapped) {
+  const DatasetFolder folder;
+  folder.write("manifest.yaml",
+               manifest("compress", kRate, kOneTrial + "  - id: b\n    file: b.csv\n"));
+  // A semicolon-separated export: one field per line, so every data line is a problem.
+  std::string semicolons = "time [s];displacement [mm];force [N]\n";
+  for (int k = 0; k < 100; ++k) semicolons += std::to_string(k) + ";0;0\n";
+  folder.write("a.csv", semicolons);
+  folder.write("b.csv", "time [s],displacement [mm],force [N]\n0,x,0\n");
+  const auto problems = problems_of(folder.path());
+  EXPECT_TRUE(has_problem(problems, "a.csv", 0, "unknown unit"));
+  EXPECT_TRUE(has_problem(problems, "b.csv", 2, "not a number"));
+
+  std::string short_rows = "time [s],displacement [mm],force [N]\n";
+  for (int k = 0; k < 100; ++k) short_rows += std::to_string(k) + ",0\n";
+  folder.write("a.csv", short_rows);
+  const auto capped = problems_of(folder.path());
+  std::size_t in_a = 0;
+  for (const DatasetProblem& p : capped) in_a += p.file.ends_with("a.csv") ? 1 : 0;
+  // 25 listed and one line counting the other 75: the file's problems stay readable.
+  EXPECT_EQ(in_a, 26U);
+  EXPECT_TRUE(has_problem(capped, "a.csv", 0, "75 more problems"));
+}
+
+TEST(Dataset, LineTracksOrderTimePerFilletAndReadTheCommandLog) {
+  const DatasetFolder folder;
+  folder.write(
+      "manifest.yaml",
+      manifest("line_tracks", "", "  - id: run1\n    file: tracks.csv\n    commands: belts.csv\n"));
+  // Two fillets interleaved: time rises per fillet, not over the file.
+  folder.write("tracks.csv",
+               "time [s],fillet [1],x [mm],y [mm],angle [deg]\n0.00,1,100,5,90\n0.00,2,0,-3,45\n"
+               "0.04,1,116,5,88\n0.04,2,16,-3,44\n");
+  folder.write("belts.csv", "time [s],takt [m/s],multilane_left [mm/s]\n0,0.4,400\n0.5,0.5,420\n");
+  const Dataset data = load_dataset(folder.path());
+  ASSERT_EQ(data.trials.size(), 1U);
+  const Trial& run = data.trials[0];
+  EXPECT_DOUBLE_EQ(run.data.at("angle").values_si[2], 88.0 * std::numbers::pi / 180.0);
+  ASSERT_TRUE(run.commands.has_value());
+  EXPECT_DOUBLE_EQ(run.commands->at("multilane_left").values_si[1], 0.42);
+
+  // A fillet number must be whole; a command column must be a speed.
+  folder.write("tracks.csv", "time [s],fillet [1],x [mm],y [mm],angle [deg]\n0,1.5,0,0,0\n");
+  folder.write("belts.csv", "time [s],takt [mm]\n0,1\n");
+  const auto problems = problems_of(folder.path());
+  EXPECT_TRUE(has_problem(problems, "tracks.csv", 2, "not a whole number"));
+  EXPECT_TRUE(
+      has_problem(problems, "belts.csv", 1, "'mm' is a unit of length, the column is a speed"));
+
+  // A fillet going back in time.
+  folder.write("tracks.csv",
+               "time [s],fillet [1],x [mm],y [mm],angle [deg]\n0.04,1,0,0,0\n0.00,2,0,0,0\n"
+               "0.00,1,0,0,0\n");
+  folder.write("belts.csv", "time [s],takt [m/s]\n0,0.4\n");
+  EXPECT_TRUE(
+      has_problem(problems_of(folder.path()), "tracks.csv", 4, "does not increase for fillet 1"));
+}
+
+TEST(Dataset, EveryExperimentHasASchema) {
+  for (const ExperimentType type :
+       {ExperimentType::kSlide, ExperimentType::kBend, ExperimentType::kSettle,
+        ExperimentType::kDrop, ExperimentType::kCompress, ExperimentType::kLineTracks,
+        ExperimentType::kBulkFlow}) {
+    const ExperimentSchema& schema = schema_of(type);
+    EXPECT_EQ(schema.type, type);
+    EXPECT_FALSE(schema.columns.empty()) << to_string(type);
+    EXPECT_EQ(experiment_from_string(to_string(type)), type);
+  }
+}
+
+}  // namespace
+}  // namespace fl::workbench
