@@ -404,28 +404,35 @@ inline std::uint32_t cell_coordinate(double x, double origin, double size, int d
 
 }  // namespace
 
+// Every per-particle array, state and history alike, re-ordered (or compacted) by `order`.
+void Simulation::gather_particles(const std::vector<std::uint32_t>& order) {
+  Impl& m = *impl_;
+  State& s = state_;
+  gather(s.position_m, m.scratch_vec3, order);
+  gather(s.velocity_m_per_s, m.scratch_vec3, order);
+  gather(s.angular_velocity_rad_per_s, m.scratch_vec3, order);
+  gather(s.force_n, m.scratch_vec3, order);
+  gather(s.torque_nm, m.scratch_vec3, order);
+  gather(m.build_position_m, m.scratch_vec3, order);
+  gather(s.radius_m, m.scratch_double, order);
+  gather(s.inverse_mass_per_kg, m.scratch_double, order);
+  gather(s.inverse_inertia_per_kg_m2, m.scratch_double, order);
+  gather(s.type, m.scratch_u32, order);
+  gather(s.body, m.scratch_u32, order);
+  gather(s.id, m.scratch_u32, order);
+  gather(m.particle_cell, m.scratch_u32, order);
+  for (auto& states : m.plane_states) gather(states, m.scratch_states, order);
+  for (auto& slots : m.mesh_slots) gather(slots, m.scratch_slots, order, kMeshSlots);
+  gather(m.wall_history, m.scratch_u64, order);
+}
+
 void Simulation::sort_particles() {
   Impl& m = *impl_;
   State& s = state_;
   const std::size_t n = s.size();
   // m.order holds old indices in cell order (from the binning in rebuild_neighbors)
   for (std::size_t k = 0; k < n; ++k) m.new_of_old[m.order[k]] = static_cast<std::uint32_t>(k);
-  gather(s.position_m, m.scratch_vec3, m.order);
-  gather(s.velocity_m_per_s, m.scratch_vec3, m.order);
-  gather(s.angular_velocity_rad_per_s, m.scratch_vec3, m.order);
-  gather(s.force_n, m.scratch_vec3, m.order);
-  gather(s.torque_nm, m.scratch_vec3, m.order);
-  gather(m.build_position_m, m.scratch_vec3, m.order);
-  gather(s.radius_m, m.scratch_double, m.order);
-  gather(s.inverse_mass_per_kg, m.scratch_double, m.order);
-  gather(s.inverse_inertia_per_kg_m2, m.scratch_double, m.order);
-  gather(s.type, m.scratch_u32, m.order);
-  gather(s.body, m.scratch_u32, m.order);
-  gather(s.id, m.scratch_u32, m.order);
-  gather(m.particle_cell, m.scratch_u32, m.order);
-  for (auto& states : m.plane_states) gather(states, m.scratch_states, m.order);
-  for (auto& slots : m.mesh_slots) gather(slots, m.scratch_slots, m.order, kMeshSlots);
-  gather(m.wall_history, m.scratch_u64, m.order);
+  gather_particles(m.order);
   for (Bond& bond : s.bonds) {
     bond.i = m.new_of_old[bond.i];
     bond.j = m.new_of_old[bond.j];
@@ -462,22 +469,7 @@ std::size_t Simulation::remove_bodies(std::span<const std::uint32_t> bodies) {
   const std::size_t removed = n - kept.size();
   if (removed == 0) return 0;
 
-  gather(s.position_m, m.scratch_vec3, kept);
-  gather(s.velocity_m_per_s, m.scratch_vec3, kept);
-  gather(s.angular_velocity_rad_per_s, m.scratch_vec3, kept);
-  gather(s.force_n, m.scratch_vec3, kept);
-  gather(s.torque_nm, m.scratch_vec3, kept);
-  gather(s.radius_m, m.scratch_double, kept);
-  gather(s.inverse_mass_per_kg, m.scratch_double, kept);
-  gather(s.inverse_inertia_per_kg_m2, m.scratch_double, kept);
-  gather(s.type, m.scratch_u32, kept);
-  gather(s.body, m.scratch_u32, kept);
-  gather(s.id, m.scratch_u32, kept);
-  gather(m.build_position_m, m.scratch_vec3, kept);
-  gather(m.particle_cell, m.scratch_u32, kept);
-  for (auto& states : m.plane_states) gather(states, m.scratch_states, kept);
-  for (auto& slots : m.mesh_slots) gather(slots, m.scratch_slots, kept, kMeshSlots);
-  gather(m.wall_history, m.scratch_u64, kept);
+  gather_particles(kept);
   // Contact history between kept particles survives: the neighbour list is compacted and
   // its active pairs are carried into the rebuild that prepare() does.
   std::vector<std::uint32_t> offsets(kept.size() + 1, 0);
