@@ -72,6 +72,11 @@ ExperimentSchema make_schema(ExperimentType type) {
       schema.conditions.push_back({"rate", Kind::kNumber, Quantity::kSpeed, 0.0, 1.0, {}, true});
       schema.conditions.push_back(
           {"hold", Kind::kNumber, Quantity::kTime, 0.0, 24.0 * 3600.0, {}, false});
+      // A cut sample's size; the twin builds its block to it.
+      schema.conditions.push_back(
+          {"sample_side", Kind::kNumber, Quantity::kLength, 1e-3, 0.3, {}, false});
+      schema.conditions.push_back(
+          {"sample_height", Kind::kNumber, Quantity::kLength, 1e-3, 0.3, {}, false});
       schema.time_ordered = true;
       break;
     case ExperimentType::kLineTracks:

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 #include "fl/twin/model_tests/model_tests.hpp"
 
@@ -113,6 +114,45 @@ CompressResult run_compress(const CompressParams& params) {
   };
 
   const double gap0 = layer_gap();
+  dem::WallState& top = sim.wall("top");
+  const auto record = [&] {
+    CompressSample s;
+    s.time_s = sim.state().time_s;
+    s.plate_travel_m = -top.translation_m.z();
+    s.block_shortening_m = gap0 - layer_gap();
+    s.section_force_n = section_force();
+    s.plate_force_n = plate_force();
+    result.series.push_back(s);
+  };
+  if (!params.profile_time_s.empty()) {
+    const std::vector<double>& times = params.profile_time_s;
+    const std::vector<double>& travels = params.profile_travel_m;
+    if (travels.size() != times.size() || !std::is_sorted(times.begin(), times.end())) {
+      throw std::invalid_argument(
+          "compress profile: times and travels differ in length or times are not sorted");
+    }
+    const double dt = spec.timestep_s;
+    std::size_t segment = 0;
+    const auto travel_at = [&](double t) {
+      while (segment + 1 < times.size() && times[segment + 1] < t) ++segment;
+      if (t <= times.front()) return travels.front();
+      if (segment + 1 >= times.size()) return travels.back();
+      const double share = (t - times[segment]) / (times[segment + 1] - times[segment]);
+      return travels[segment] + share * (travels[segment + 1] - travels[segment]);
+    };
+    const double start_s = times.front();
+    for (std::size_t sample = 0; sample < times.size(); ++sample) {
+      // Plate velocity each step lands it on the profile at the step's end: no drift.
+      while (sim.state().time_s + start_s < times[sample] - 0.5 * dt) {
+        const double target = travel_at(sim.state().time_s + start_s + dt);
+        top.linear_velocity_m_per_s = Vec3(0.0, 0.0, -(target + top.translation_m.z()) / dt);
+        sim.step(1);
+      }
+      record();
+    }
+    top.linear_velocity_m_per_s = Vec3::Zero();
+    return result;
+  }
   const double travel_total = params.max_strain * height;
   // Smooth start (half-cosine velocity ramp over 20% of the travel time) so that the
   // undamped bonds are not set ringing by a jump in plate speed.
@@ -121,7 +161,6 @@ CompressResult run_compress(const CompressParams& params) {
   const auto samples = static_cast<std::size_t>(std::max(10, params.samples));
   const auto steps_per_sample = static_cast<std::size_t>(
       std::max(1.0, std::ceil(run_s / spec.timestep_s / static_cast<double>(samples))));
-  dem::WallState& top = sim.wall("top");
   for (std::size_t sample = 0; sample < samples; ++sample) {
     for (std::size_t k = 0; k < steps_per_sample; ++k) {
       const double t = sim.state().time_s;
@@ -129,13 +168,7 @@ CompressResult run_compress(const CompressParams& params) {
       top.linear_velocity_m_per_s = Vec3(0.0, 0.0, -params.speed_m_per_s * share);
       sim.step(1);
     }
-    CompressSample s;
-    s.time_s = sim.state().time_s;
-    s.plate_travel_m = -top.translation_m.z();
-    s.block_shortening_m = gap0 - layer_gap();
-    s.section_force_n = section_force();
-    s.plate_force_n = plate_force();
-    result.series.push_back(s);
+    record();
   }
   // Fit over the loading part past the ramp (strain from 20% of the maximum on).
   std::vector<double> shortening, section, travel, plate;

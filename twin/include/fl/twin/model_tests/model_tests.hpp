@@ -141,6 +141,11 @@ struct CompressParams {
   double speed_m_per_s = 0.01;  // plate speed after a smooth start
   double max_strain = 0.05;
   int samples = 100;
+  // A measured test instead (load, hold, unload): the plate's travel at these times,
+  // linearly interpolated, starting at 0 with the plate touching; one sample per entry.
+  // Replaces speed, max_strain and samples when not empty.
+  std::vector<double> profile_time_s;
+  std::vector<double> profile_travel_m;
 };
 
 struct CompressSample {

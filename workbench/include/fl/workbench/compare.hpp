@@ -1,0 +1,87 @@
+// Model against measurement: run a model under each trial's conditions, align it with the
+// measured rows, and say where it fails: the error per channel, trial, condition and phase,
+// ranked, with every trace kept for the report (report.hpp writes JSON and HTML).
+//
+//   TwinCompressModel twin(options);                  // or any TrialModel
+//   const CompareReport report = compare(dataset, twin);
+//   report.cells.front()                               // the worst segment
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fl/workbench/dataset.hpp"
+
+namespace fl::workbench {
+
+// Reproduces trials. The model returns its response channels (same names and quantities as
+// the measured ones) at the trial's rows; the driving channels (time, displacement, ...) are
+// the measured ones.
+class TrialModel {
+ public:
+  TrialModel() = default;
+  TrialModel(const TrialModel&) = delete;
+  TrialModel& operator=(const TrialModel&) = delete;
+  virtual ~TrialModel() = default;
+
+  // "DEM twin: appendix B, r 7 mm, effects: bpm_viscoelastic": goes into the report.
+  [[nodiscard]] virtual std::string describe() const = 0;
+  // Throws std::runtime_error when the trial cannot be run (a condition it does not support).
+  virtual Table run(const Dataset& dataset, const Trial& trial) = 0;
+};
+
+// The channels a model is judged on, per experiment (the others drive it).
+std::vector<std::string_view> response_channels(ExperimentType type);
+
+// Phase of each row: compress has "loading", "hold" and "unloading" (from the measured
+// displacement's rate); other experiments one phase, "all".
+std::vector<std::string> phases_of(ExperimentType type, const Trial& trial);
+
+struct ChannelTrace {
+  std::string channel;
+  Unit unit;  // the measurement's, for plots in the user's units
+  std::vector<double> measured_si;
+  std::vector<double> model_si;
+};
+
+struct TrialTrace {
+  std::string trial;
+  std::vector<double> time_s;  // or the row number when the experiment has no time
+  std::vector<std::string> phase;
+  std::vector<ChannelTrace> channels;
+};
+
+// The error of one channel over one group of rows.
+struct ErrorCell {
+  std::string channel;
+  std::string group;  // "trial fast", "phase hold", "surface=wet", "all"
+  std::string trial;  // the trial, or empty when the group spans trials
+  std::string phase;  // the phase, or empty
+  std::size_t samples = 0;
+  double rmse_si = 0.0;
+  double bias_si = 0.0;  // mean of model - measured
+  double max_abs_si = 0.0;
+  double max_abs_time_s = 0.0;  // where the largest residual is (time or row)
+  double noise_si = 0.0;        // the dataset's 1-sigma noise; 0 when not given
+  // rmse / noise when the noise is known, else rmse / rms(measured): how bad, comparable
+  // across channels. Cells are ranked by it.
+  double score = 0.0;
+};
+
+struct CompareReport {
+  std::string dataset;
+  ExperimentType experiment = ExperimentType::kCompress;
+  std::string model;
+  std::vector<TrialTrace> traces;
+  std::vector<ErrorCell> cells;            // worst first; the "all" cells of every channel included
+  std::vector<std::string> failed_trials;  // "id: reason" for trials the model could not run
+
+  // The "all" cell of a channel; throws std::out_of_range when there is none.
+  [[nodiscard]] const ErrorCell& overall(std::string_view channel) const;
+};
+
+// Runs every trial; a trial the model cannot run is listed in failed_trials, not fatal.
+// Throws std::runtime_error when no trial could be run.
+CompareReport compare(const Dataset& dataset, TrialModel& model);
+
+}  // namespace fl::workbench

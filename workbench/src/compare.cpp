@@ -1,0 +1,222 @@
+#include "fl/workbench/compare.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+namespace fl::workbench {
+namespace {
+
+// Rows whose displacement rate is below this share of the trial's fastest are "hold": a
+// test machine holding position still jitters by a few encoder counts.
+constexpr double kHoldRateShare = 0.05;
+
+struct Accumulator {
+  std::size_t samples = 0;
+  double sum_sq = 0.0;
+  double sum = 0.0;
+  double sum_sq_measured = 0.0;
+  double max_abs = 0.0;
+  double max_abs_time = 0.0;
+
+  void add(double measured, double model, double time) {
+    const double residual = model - measured;
+    ++samples;
+    sum_sq += residual * residual;
+    sum += residual;
+    sum_sq_measured += measured * measured;
+    if (std::abs(residual) >= max_abs) {
+      max_abs = std::abs(residual);
+      max_abs_time = time;
+    }
+  }
+};
+
+ErrorCell make_cell(const std::string& channel, std::string group, std::string trial,
+                    std::string phase, const Accumulator& a, double noise_si) {
+  ErrorCell cell;
+  cell.channel = channel;
+  cell.group = std::move(group);
+  cell.trial = std::move(trial);
+  cell.phase = std::move(phase);
+  cell.samples = a.samples;
+  const double n = static_cast<double>(std::max<std::size_t>(a.samples, 1));
+  cell.rmse_si = std::sqrt(a.sum_sq / n);
+  cell.bias_si = a.sum / n;
+  cell.max_abs_si = a.max_abs;
+  cell.max_abs_time_s = a.max_abs_time;
+  cell.noise_si = noise_si;
+  const double scale = noise_si > 0.0 ? noise_si : std::sqrt(a.sum_sq_measured / n);
+  cell.score = scale > 0.0 ? cell.rmse_si / scale : cell.rmse_si;
+  return cell;
+}
+
+std::string condition_text(const ConditionValue& value) {
+  if (const auto* label = std::get_if<std::string>(&value)) return *label;
+  if (const auto* flag = std::get_if<bool>(&value)) return *flag ? "true" : "false";
+  return {};  // numbers are not grouped: each trial has its own cells already
+}
+
+}  // namespace
+
+std::vector<std::string_view> response_channels(ExperimentType type) {
+  switch (type) {
+    case ExperimentType::kSlide:
+      return {"onset_angle"};
+    case ExperimentType::kBend:
+      return {"bend_angle"};
+    case ExperimentType::kSettle:
+    case ExperimentType::kDrop:
+      return {"height"};
+    case ExperimentType::kCompress:
+      return {"force"};
+    case ExperimentType::kLineTracks:
+      return {"x", "y", "angle"};
+    case ExperimentType::kBulkFlow:
+      return {"outflow"};
+  }
+  return {};
+}
+
+std::vector<std::string> phases_of(ExperimentType type, const Trial& trial) {
+  const std::size_t rows = trial.data.rows();
+  std::vector<std::string> phase(rows, "all");
+  if (type != ExperimentType::kCompress || rows < 2) return phase;
+  const std::vector<double>& t = trial.data.at("time").values_si;
+  const std::vector<double>& d = trial.data.at("displacement").values_si;
+  std::vector<double> rate(rows, 0.0);
+  double fastest = 0.0;
+  for (std::size_t k = 0; k < rows; ++k) {
+    const std::size_t a = k == 0 ? 0 : k - 1;
+    const std::size_t b = k + 1 == rows ? k : k + 1;
+    rate[k] = (d[b] - d[a]) / (t[b] - t[a]);
+    fastest = std::max(fastest, std::abs(rate[k]));
+  }
+  for (std::size_t k = 0; k < rows; ++k) {
+    if (std::abs(rate[k]) <= kHoldRateShare * fastest) {
+      phase[k] = "hold";
+    } else {
+      phase[k] = rate[k] > 0.0 ? "loading" : "unloading";
+    }
+  }
+  return phase;
+}
+
+const ErrorCell& CompareReport::overall(std::string_view channel) const {
+  for (const ErrorCell& cell : cells) {
+    if (cell.channel == channel && cell.group == "all") return cell;
+  }
+  throw std::out_of_range("no overall error for channel '" + std::string(channel) + "'");
+}
+
+CompareReport compare(const Dataset& dataset, TrialModel& model) {
+  CompareReport report;
+  report.dataset = dataset.name;
+  report.experiment = dataset.experiment;
+  report.model = model.describe();
+  const std::vector<std::string_view> channels = response_channels(dataset.experiment);
+
+  // Accumulators per (channel, group key); the key orders the cells before ranking.
+  struct Group {
+    std::string group, trial, phase;
+    Accumulator acc;
+  };
+  std::map<std::string, Group> groups;
+  const auto add = [&](std::string_view channel, const std::string& key, const std::string& trial,
+                       const std::string& phase, double measured, double model_value, double time) {
+    Group& g = groups[std::string(channel) + "\n" + key];
+    g.group = key;
+    g.trial = trial;
+    g.phase = phase;
+    g.acc.add(measured, model_value, time);
+  };
+  std::set<std::string> varying_conditions;
+  for (const Trial& trial : dataset.trials) {
+    for (const auto& [name, value] : trial.conditions) {
+      const std::string text = condition_text(value);
+      if (text.empty()) continue;
+      for (const Trial& other : dataset.trials) {
+        const auto found = other.conditions.find(name);
+        if (found == other.conditions.end() || condition_text(found->second) != text) {
+          varying_conditions.insert(name);
+        }
+      }
+    }
+  }
+
+  for (std::size_t index = 0; index < dataset.trials.size(); ++index) {
+    const Trial& trial = dataset.trials[index];
+    spdlog::info("compare: trial {} of {} ({})", index + 1, dataset.trials.size(), trial.id);
+    Table modelled;
+    try {
+      modelled = model.run(dataset, trial);
+    } catch (const std::exception& error) {
+      report.failed_trials.push_back(trial.id + ": " + error.what());
+      spdlog::warn("compare: trial {} not run: {}", trial.id, error.what());
+      continue;
+    }
+    TrialTrace trace;
+    trace.trial = trial.id;
+    trace.phase = phases_of(dataset.experiment, trial);
+    const Channel* time = trial.data.find("time");
+    for (std::size_t k = 0; k < trial.data.rows(); ++k) {
+      trace.time_s.push_back(time != nullptr ? time->values_si[k] : static_cast<double>(k));
+    }
+    bool usable = true;
+    for (const std::string_view name : channels) {
+      const Channel& measured = trial.data.at(name);
+      const Channel* predicted = modelled.find(name);
+      if (predicted == nullptr || predicted->values_si.size() != measured.values_si.size()) {
+        report.failed_trials.push_back(trial.id + ": the model gave no '" + std::string(name) +
+                                       "' at the trial's " + std::to_string(trial.data.rows()) +
+                                       " rows");
+        usable = false;
+        break;
+      }
+      trace.channels.push_back(
+          {std::string(name), measured.unit, measured.values_si, predicted->values_si});
+    }
+    if (!usable) continue;
+    for (const ChannelTrace& c : trace.channels) {
+      for (std::size_t k = 0; k < c.measured_si.size(); ++k) {
+        const double m = c.measured_si[k];
+        const double p = c.model_si[k];
+        const double t = trace.time_s[k];
+        add(c.channel, "all", "", "", m, p, t);
+        add(c.channel, "trial " + trial.id, trial.id, "", m, p, t);
+        if (trace.phase[k] != "all") {
+          add(c.channel, "phase " + trace.phase[k], "", trace.phase[k], m, p, t);
+          add(c.channel, "trial " + trial.id + ", " + trace.phase[k], trial.id, trace.phase[k], m,
+              p, t);
+        }
+        for (const std::string& name : varying_conditions) {
+          const auto found = trial.conditions.find(name);
+          if (found == trial.conditions.end()) continue;
+          add(c.channel, name + "=" + condition_text(found->second), "", "", m, p, t);
+        }
+      }
+    }
+    report.traces.push_back(std::move(trace));
+  }
+  if (report.traces.empty()) {
+    std::string reasons;
+    for (const std::string& failure : report.failed_trials) reasons += "\n  " + failure;
+    throw std::runtime_error("compare: the model ran none of the trials of '" + dataset.name +
+                             "':" + reasons);
+  }
+  for (const auto& [key, g] : groups) {
+    const std::string channel = key.substr(0, key.find('\n'));
+    const auto noise = dataset.noise_si.find(channel);
+    report.cells.push_back(make_cell(channel, g.group, g.trial, g.phase, g.acc,
+                                     noise == dataset.noise_si.end() ? 0.0 : noise->second));
+  }
+  std::stable_sort(report.cells.begin(), report.cells.end(),
+                   [](const ErrorCell& a, const ErrorCell& b) { return a.score > b.score; });
+  return report;
+}
+
+}  // namespace fl::workbench
