@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "cli_support.hpp"
+#include "compare_command.hpp"
 #include "dem_output.hpp"
 #include "duration.hpp"
 #include "fl/apps/closed_loop.hpp"
@@ -282,6 +283,8 @@ int main(int argc, char** argv) {
   CLI::App* twin_serve = add_twin_subcommand(app, twin_args);
   ControlArgs control_args;
   CLI::App* control = add_control_subcommand(app, control_args);
+  CompareArgs compare_args;
+  CLI::App* compare = add_compare_subcommand(app, compare_args);
 
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
@@ -293,6 +296,7 @@ int main(int argc, char** argv) {
     if (replay->parsed()) return replay_command(replay_args);
     if (twin_serve->parsed()) return twin_serve_command(twin_args);
     if (control->parsed()) return control_command(control_args);
+    if (compare->parsed()) return compare_command(compare_args);
     if (check->parsed()) {
       fl::load_line_config(check_path);
       spdlog::info("{}: valid", check_path);

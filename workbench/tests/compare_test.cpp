@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
 
+#include "fl/workbench/history.hpp"
 #include "fl/workbench/report.hpp"
 
 namespace fl::workbench {
@@ -181,6 +183,40 @@ TEST(Compare, ReportFilesCarryTheRankingAndTraces) {
   EXPECT_TRUE(std::filesystem::exists(folder / "report.html"));
   EXPECT_TRUE(std::filesystem::exists(folder / "report.json"));
   std::filesystem::remove_all(folder);
+}
+
+}  // namespace
+}  // namespace fl::workbench
+
+namespace fl::workbench {
+namespace {
+
+TEST(History, AppendsReadsBackAndSkipsBrokenLines) {
+  const auto csv = std::filesystem::temp_directory_path() / "fl_workbench_history.csv";
+  std::filesystem::remove(csv);
+  Dataset data = make_dataset({make_trial("a", spring)});
+  data.name = "lab, week 3";  // a comma: the field must be quoted
+  SpringModel off(0.1);
+  const CompareReport first = compare(data, off);
+  append_history(csv, first, "2026-11-26T05:00:00Z");
+  SpringModel better(0.01);
+  const CompareReport second = compare(data, better);
+  append_history(csv, second, "2026-11-26T05:10:00Z");
+  std::ofstream(csv, std::ios::app) << "garbage line\n";
+  const std::vector<HistoryEntry> history = read_history(csv);
+  ASSERT_EQ(history.size(), 2U);
+  EXPECT_EQ(history[0].dataset, "lab, week 3");
+  EXPECT_EQ(history[0].channel, "force");
+  // to_chars writes the shortest text that reads back to the same double: exact.
+  EXPECT_EQ(history[0].rmse_si, first.overall("force").rmse_si);
+  EXPECT_EQ(history[1].score, second.overall("force").score);
+  EXPECT_LT(history[1].score, history[0].score);
+  EXPECT_EQ(history[1].model, "linear spring");
+  const auto svg = csv.parent_path() / "fl_workbench_history.svg";
+  plot_history(history, svg);
+  EXPECT_TRUE(std::filesystem::exists(svg));
+  std::filesystem::remove(csv);
+  std::filesystem::remove(svg);
 }
 
 }  // namespace

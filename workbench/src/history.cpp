@@ -1,0 +1,98 @@
+#include "fl/workbench/history.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <charconv>
+#include <fstream>
+#include <map>
+
+#include "csv_reader.hpp"
+#include "fl/report/svg_plot.hpp"
+
+namespace fl::workbench {
+namespace {
+
+constexpr const char* kHeader = "run_utc,dataset,channel,rmse_si,score,model";
+
+// RFC 4180 quoting: the model description holds commas.
+std::string quoted(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string number(double value) {
+  char text[32];
+  const auto [end, error] = std::to_chars(text, text + sizeof text, value);
+  return error == std::errc{} ? std::string(text, end) : std::string("nan");
+}
+
+bool parse_number(const std::string& text, double& value) {
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  return error == std::errc{} && end == text.data() + text.size();
+}
+
+}  // namespace
+
+void append_history(const std::filesystem::path& csv, const CompareReport& report,
+                    const std::string& run_utc) {
+  const bool fresh = !std::filesystem::exists(csv);
+  std::ofstream out(csv, std::ios::app | std::ios::binary);
+  if (fresh) out << kHeader << '\n';
+  for (const ErrorCell& cell : report.cells) {
+    if (cell.group != "all") continue;
+    out << run_utc << ',' << quoted(report.dataset) << ',' << quoted(cell.channel) << ','
+        << number(cell.rmse_si) << ',' << number(cell.score) << ',' << quoted(report.model) << '\n';
+  }
+  if (!out) throw std::runtime_error("cannot append to " + csv.string());
+}
+
+std::vector<HistoryEntry> read_history(const std::filesystem::path& csv) {
+  std::vector<detail::CsvRow> rows;
+  std::vector<detail::CsvIssue> issues;
+  std::vector<HistoryEntry> history;
+  if (!detail::read_csv(csv, rows, issues)) return history;
+  for (const detail::CsvIssue& issue : issues) {
+    spdlog::warn("{}:{}: {}, line skipped", csv.string(), issue.line, issue.message);
+  }
+  for (std::size_t k = 1; k < rows.size(); ++k) {
+    const detail::CsvRow& row = rows[k];
+    HistoryEntry entry;
+    if (row.fields.size() != 6 || !parse_number(row.fields[3], entry.rmse_si) ||
+        !parse_number(row.fields[4], entry.score)) {
+      spdlog::warn("{}:{}: not a history line ({}), skipped", csv.string(), row.line, kHeader);
+      continue;
+    }
+    entry.run_utc = row.fields[0];
+    entry.dataset = row.fields[1];
+    entry.channel = row.fields[2];
+    entry.model = row.fields[5];
+    history.push_back(std::move(entry));
+  }
+  return history;
+}
+
+void plot_history(const std::vector<HistoryEntry>& history, const std::filesystem::path& svg) {
+  std::map<std::string, std::vector<double>> scores;
+  for (const HistoryEntry& entry : history) scores[entry.channel].push_back(entry.score);
+  report::Plot plot;
+  plot.title = "Error across model iterations";
+  plot.x.label = "run";
+  plot.y.label = "score (noise sigmas, or share of the signal)";
+  for (const auto& [channel, values] : scores) {
+    report::Series series;
+    series.label = channel;
+    series.style = report::SeriesStyle::kLineAndMarkers;
+    for (std::size_t k = 0; k < values.size(); ++k) {
+      series.x.push_back(static_cast<double>(k + 1));
+      series.y.push_back(values[k]);
+    }
+    plot.series.push_back(std::move(series));
+  }
+  if (!plot.series.empty()) report::write_svg(plot, svg);
+}
+
+}  // namespace fl::workbench
