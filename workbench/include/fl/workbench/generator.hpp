@@ -1,0 +1,57 @@
+// Synthetic measured datasets with a hidden effect, to prove the workbench: a truth model
+// (the DEM twin plus one effect from the effect library, chosen at random with random
+// parameters in a physical range, or none) run under a dataset's conditions, plus sensor
+// noise. The truth goes to a separate file, so that whatever analyses the dataset cannot see
+// it.
+//
+//   GeneratorOptions options;  options.seed = 7;  options.effect = "random";
+//   const GeneratedDataset made = generate_dataset(options);
+//   write_dataset(made.dataset, "data/hidden_7");
+//   write_truth(made.truth, "data/hidden_7.truth.yaml");
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "fl/twin/model_tests/fixtures.hpp"
+#include "fl/workbench/dataset.hpp"
+
+namespace fl::workbench {
+
+struct HiddenEffect {
+  std::string law;  // a bond or contact law of the effect library; empty: no hidden effect
+  dem::LawParameters parameters;
+};
+
+// The effects a compression test can reveal (bond laws), with their physical ranges.
+std::vector<std::string> compress_effect_candidates();
+
+struct GeneratorOptions {
+  ExperimentType experiment = ExperimentType::kCompress;  // compress only, so far
+  std::uint64_t seed = 1;
+  // "random": one of the candidates; "none"; or a law name from the candidates.
+  std::string effect = "random";
+  double force_noise_n = 0.01;       // 1 sigma, Gaussian; written into the manifest
+  int trials = 3;                    // loading rates 1x, 2x, 4x
+  model_tests::CommonParams common;  // the base model (appendix B, 7 mm) the effect joins
+};
+
+struct GeneratedDataset {
+  Dataset dataset;
+  HiddenEffect truth;
+};
+
+// Throws std::invalid_argument for an experiment or effect it cannot generate.
+GeneratedDataset generate_dataset(const GeneratorOptions& options);
+
+// The base model's spec with an effect's bond law in place of bpm (parameters kept, the
+// effect's added). Shared by the generator and by what fits effects.
+dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& effect);
+
+// Writes the dataset in the measurement format (manifest.yaml and one CSV per trial).
+void write_dataset(const Dataset& dataset, const std::filesystem::path& folder);
+void write_truth(const HiddenEffect& truth, const std::filesystem::path& file);
+
+}  // namespace fl::workbench

@@ -1,0 +1,213 @@
+#include "fl/workbench/generator.hpp"
+
+#include <charconv>
+#include <fstream>
+#include <random>
+#include <stdexcept>
+
+#include "fl/twin/dem/config.hpp"
+#include "fl/workbench/twin_models.hpp"
+
+namespace fl::workbench {
+namespace {
+
+struct ParameterRange {
+  const char* name;
+  double min;
+  double max;
+  bool log;  // drawn log-uniform (time constants, stiffnesses spanning decades)
+};
+
+struct EffectRange {
+  const char* law;
+  std::vector<ParameterRange> parameters;
+};
+
+// Physical ranges for the 7 mm block of the compress test (appendix B bonds, 1e6 N/m^3):
+// a Maxwell arm from a third to twice the bond spring relaxing in 10 to 100 ms (the hold is
+// 100 ms); a yield stress at 30 to 60 % of the ~170 Pa the bonds reach at the peak load.
+const std::vector<EffectRange>& compress_effects() {
+  static const std::vector<EffectRange> effects{
+      {"bpm_viscoelastic",
+       {{"relaxation_stiffness_n_per_m3", 3e5, 2e6, true}, {"relaxation_time_s", 0.01, 0.1, true}}},
+      {"bpm_plastic", {{"normal_yield_strength_pa", 50.0, 100.0, false}}},
+  };
+  return effects;
+}
+
+std::string number(double value) {
+  char text[32];
+  const auto [end, error] = std::to_chars(text, text + sizeof text, value);
+  return error == std::errc{} ? std::string(text, end) : std::string("0");
+}
+
+// Load to the peak travel over `ramp_s`, hold, unload over `ramp_s`; rows every 5 ms.
+Trial compress_trial(const std::string& id, double ramp_s) {
+  constexpr double kPeakTravelM = 0.5e-3;  // 1.8 % of the 28 mm block: linear bonds
+  constexpr double kHoldS = 0.1;
+  constexpr double kRowS = 0.005;
+  Trial trial;
+  trial.id = id;
+  std::vector<double> t, d;
+  const double end_s = 2.0 * ramp_s + kHoldS;
+  const auto rows = static_cast<int>(std::lround(end_s / kRowS));
+  for (int k = 0; k <= rows; ++k) {
+    const double time = kRowS * k;
+    double travel = kPeakTravelM;
+    if (time < ramp_s) travel = kPeakTravelM * time / ramp_s;
+    if (time > ramp_s + kHoldS) travel = kPeakTravelM * std::max(0.0, end_s - time) / ramp_s;
+    t.push_back(time);
+    d.push_back(travel);
+  }
+  trial.data.channels = {{"time", *find_unit("s"), t},
+                         {"displacement", *find_unit("mm"), d},
+                         {"force", *find_unit("N"), std::vector<double>(t.size(), 0.0)}};
+  trial.data.lines.resize(t.size());
+  trial.conditions["rate"] = kPeakTravelM / ramp_s;
+  trial.conditions["sample_side"] = 0.07;     // 5 spheres of 14 mm
+  trial.conditions["sample_height"] = 0.056;  // 4 layers
+  return trial;
+}
+
+}  // namespace
+
+std::vector<std::string> compress_effect_candidates() {
+  std::vector<std::string> names;
+  for (const EffectRange& effect : compress_effects()) names.emplace_back(effect.law);
+  return names;
+}
+
+dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& effect) {
+  dem::ModelSpec spec = base;
+  if (effect.law.empty()) return spec;
+  for (dem::InteractionSpec& interaction : spec.interactions) {
+    if (!interaction.bond_law) continue;
+    interaction.bond_law->name = effect.law;
+    for (const auto& [key, value] : effect.parameters)
+      interaction.bond_law->parameters[key] = value;
+  }
+  return spec;
+}
+
+GeneratedDataset generate_dataset(const GeneratorOptions& options) {
+  if (options.experiment != ExperimentType::kCompress) {
+    throw std::invalid_argument("the generator makes compress datasets only, not " +
+                                std::string(to_string(options.experiment)));
+  }
+  if (options.trials < 1 || !(options.force_noise_n >= 0.0)) {
+    throw std::invalid_argument("generator: trials must be >= 1 and the noise >= 0");
+  }
+  std::mt19937_64 random(options.seed);
+  GeneratedDataset made;
+  const std::vector<EffectRange>& effects = compress_effects();
+  const EffectRange* chosen = nullptr;
+  if (options.effect == "random") {
+    chosen = &effects[std::uniform_int_distribution<std::size_t>(0, effects.size() - 1)(random)];
+  } else if (options.effect != "none") {
+    for (const EffectRange& effect : effects) {
+      if (options.effect == effect.law) chosen = &effect;
+    }
+    if (chosen == nullptr) {
+      throw std::invalid_argument("generator: '" + options.effect +
+                                  "' is not random, none or a compress effect");
+    }
+  }
+  if (chosen != nullptr) {
+    made.truth.law = chosen->law;
+    for (const ParameterRange& p : chosen->parameters) {
+      const double u = std::uniform_real_distribution<double>(0.0, 1.0)(random);
+      made.truth.parameters[p.name] =
+          p.log ? p.min * std::pow(p.max / p.min, u) : p.min + u * (p.max - p.min);
+    }
+  }
+
+  model_tests::CommonParams truth_common = options.common;
+  if (truth_common.base_spec.materials.empty())
+    truth_common.base_spec = dem::appendix_b_model_spec();
+  truth_common.base_spec = with_bond_effect(truth_common.base_spec, made.truth);
+  TwinCompressModel truth(truth_common);
+
+  Dataset& data = made.dataset;
+  data.name = "synthetic compress, seed " + std::to_string(options.seed);
+  data.description = "made by the workbench generator; the truth is in a separate file";
+  data.experiment = ExperimentType::kCompress;
+  data.noise_si["force"] = options.force_noise_n;
+  std::normal_distribution<double> noise(0.0, options.force_noise_n);
+  for (int k = 0; k < options.trials; ++k) {
+    const double ramp_s = 0.2 / std::pow(2.0, k);  // 0.2, 0.1, 0.05 s: rate dependence shows
+    Trial trial = compress_trial("rate" + std::to_string(k + 1), ramp_s);
+    const Table force = truth.run(data, trial);
+    std::vector<double>& measured = trial.data.channels[2].values_si;
+    measured = force.at("force").values_si;
+    if (options.force_noise_n > 0.0) {
+      for (double& value : measured) value += noise(random);
+    }
+    data.trials.push_back(std::move(trial));
+  }
+  return made;
+}
+
+void write_dataset(const Dataset& dataset, const std::filesystem::path& folder) {
+  std::filesystem::create_directories(folder);
+  std::ofstream manifest(folder / "manifest.yaml");
+  manifest << "format: fillet-measurements/1\nname: \"" << dataset.name << "\"\n"
+           << "description: \"" << dataset.description
+           << "\"\nexperiment: " << to_string(dataset.experiment) << "\n";
+  if (!dataset.noise_si.empty()) {
+    manifest << "noise:\n";
+    for (const auto& [channel, sigma] : dataset.noise_si) {
+      // Written in the channel's file unit, as a lab would.
+      const Unit unit = dataset.trials.empty() ? *find_unit(si_unit(Quantity::kDimensionless))
+                                               : dataset.trials[0].data.at(channel).unit;
+      manifest << "  " << channel << ": " << number(sigma / unit.to_si) << " " << unit.symbol
+               << "\n";
+    }
+  }
+  manifest << "trials:\n";
+  for (const Trial& trial : dataset.trials) {
+    const std::string file = trial.id + ".csv";
+    manifest << "  - id: " << trial.id << "\n    file: " << file << "\n";
+    if (!trial.conditions.empty()) manifest << "    conditions:\n";
+    for (const auto& [name, value] : trial.conditions) {
+      manifest << "      " << name << ": ";
+      if (const auto* label = std::get_if<std::string>(&value)) manifest << *label;
+      if (const auto* flag = std::get_if<bool>(&value)) manifest << (*flag ? "true" : "false");
+      if (const auto* si = std::get_if<double>(&value)) {
+        // SI with the unit of the condition's quantity.
+        Quantity quantity = Quantity::kDimensionless;
+        for (const ConditionRule& rule : schema_of(dataset.experiment).conditions) {
+          if (rule.name == name) quantity = rule.quantity;
+        }
+        manifest << number(*si) << " " << si_unit(quantity);
+      }
+      manifest << "\n";
+    }
+    std::ofstream csv(folder / file);
+    for (std::size_t c = 0; c < trial.data.channels.size(); ++c) {
+      const Channel& channel = trial.data.channels[c];
+      csv << (c == 0 ? "" : ",") << channel.name << " [" << channel.unit.symbol << "]";
+    }
+    csv << "\n";
+    for (std::size_t row = 0; row < trial.data.rows(); ++row) {
+      for (std::size_t c = 0; c < trial.data.channels.size(); ++c) {
+        const Channel& channel = trial.data.channels[c];
+        csv << (c == 0 ? "" : ",") << number(channel.values_si[row] / channel.unit.to_si);
+      }
+      csv << "\n";
+    }
+    if (!csv) throw std::runtime_error("cannot write " + (folder / file).string());
+  }
+  if (!manifest) throw std::runtime_error("cannot write " + (folder / "manifest.yaml").string());
+}
+
+void write_truth(const HiddenEffect& truth, const std::filesystem::path& file) {
+  std::ofstream out(file);
+  out << "# The hidden effect of a generated dataset: for checking a diagnosis, not for it.\n"
+      << "effect: " << (truth.law.empty() ? "none" : truth.law) << "\nparameters:\n";
+  if (truth.parameters.empty()) out << "  {}\n";
+  for (const auto& [key, value] : truth.parameters)
+    out << "  " << key << ": " << number(value) << "\n";
+  if (!out) throw std::runtime_error("cannot write " + file.string());
+}
+
+}  // namespace fl::workbench
