@@ -4,10 +4,14 @@
 
 #include <chrono>
 #include <ctime>
+#include <fstream>
+#include <optional>
 
 #include "cli_support.hpp"
 #include "fl/controller/yaml_reader.hpp"
 #include "fl/twin/dem/config.hpp"
+#include "fl/workbench/diagnose.hpp"
+#include "fl/workbench/generator.hpp"
 #include "fl/workbench/history.hpp"
 #include "fl/workbench/report.hpp"
 #include "fl/workbench/twin_models.hpp"
@@ -27,50 +31,130 @@ std::string utc_now() {
   return text;
 }
 
+// The dataset and the base model both commands start from; nullopt (reported) when unusable.
+struct WorkbenchInputs {
+  Dataset dataset;
+  model_tests::CommonParams common;
+};
+
+std::optional<WorkbenchInputs> load_inputs(const CompareArgs& args) {
+  WorkbenchInputs inputs;
+  try {
+    inputs.dataset = load_dataset(args.dataset);
+  } catch (const DatasetError& error) {
+    spdlog::error("{}", error.what());
+    return std::nullopt;
+  }
+  const fs::path dem_config =
+      args.dem_config.empty() ? default_config("dem.yaml") : fs::path(args.dem_config);
+  inputs.common.base_spec = dem::load_model_spec(dem_config);
+  inputs.common.sub_particle_radius_m = args.radius_mm * 1e-3;
+  inputs.common.thread_count = args.threads;
+  if (inputs.dataset.experiment != ExperimentType::kCompress) {
+    spdlog::error("{}: the twin does not reproduce {} datasets yet (compress only)", args.dataset,
+                  to_string(inputs.dataset.experiment));
+    return std::nullopt;
+  }
+  return inputs;
+}
+
+fs::path out_folder(const CompareArgs& args, const char* prefix) {
+  return args.out.empty()
+             ? fs::path(std::string(prefix) + fs::path(args.dataset).filename().string())
+             : fs::path(args.out);
+}
+
+void add_model_options(CLI::App& command, CompareArgs& args) {
+  command.add_option("dataset", args.dataset, "dataset folder (docs/measurements.md)")->required();
+  command.add_option("--out", args.out, "output folder");
+  command.add_option("--dem-config", args.dem_config, "DEM model (default config/dem.yaml)");
+  command.add_option("--radius-mm", args.radius_mm, "sub-particle radius of the twin")
+      ->check(CLI::Range(3.0, 7.0));
+  command.add_option("--threads", args.threads, "engine threads per twin run")
+      ->check(CLI::Range(1, 64));
+}
+
 }  // namespace
+
+CLI::App* add_diagnose_subcommand(CLI::App& app, CompareArgs& args) {
+  CLI::App* command = app.add_subcommand(
+      "diagnose", "find which effect of the effect library the model lacks for a dataset");
+  add_model_options(*command, args);
+  return command;
+}
+
+CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args) {
+  CLI::App* dataset = app.add_subcommand("dataset", "measurement dataset tools");
+  dataset->require_subcommand(1);
+  CLI::App* generate = dataset->add_subcommand(
+      "generate", "write a synthetic compress dataset with a hidden effect");
+  generate->add_option("--out", args.out, "dataset folder to write")->required();
+  generate->add_option("--effect", args.effect, "random, none, or an effect law");
+  generate->add_option("--seed", args.seed, "random seed (effect, parameters, noise)");
+  generate->add_option("--force-noise-n", args.force_noise_n, "1-sigma force noise in N")
+      ->check(CLI::Range(0.0, 10.0));
+  return dataset;
+}
+
+int generate_command(const GenerateArgs& args) {
+  GeneratorOptions options;
+  options.seed = args.seed;
+  options.effect = args.effect;
+  options.force_noise_n = args.force_noise_n;
+  options.common.base_spec = dem::load_model_spec(default_config("dem.yaml"));
+  const GeneratedDataset made = generate_dataset(options);
+  write_dataset(made.dataset, args.out);
+  const std::string truth_file = fs::path(args.out).string() + ".truth.yaml";
+  write_truth(made.truth, truth_file);
+  spdlog::info("dataset written to {} ({} trials); the hidden truth is in {}", args.out,
+               made.dataset.trials.size(), truth_file);
+  return 0;
+}
+
+int diagnose_command(const CompareArgs& args) {
+  const std::optional<WorkbenchInputs> inputs = load_inputs(args);
+  if (!inputs) return 2;
+  const Diagnosis diagnosis = diagnose(inputs->dataset, inputs->common, compress_candidates());
+  const fs::path out = out_folder(args, "diagnose_");
+  fs::create_directories(out);
+  std::ofstream(out / "diagnosis.json") << diagnosis_json(diagnosis) << "\n";
+  spdlog::info("{:<18} {:>10} {:>12} {:>14}  fitted", "effect", "delta BIC", "RMS fall %",
+               "held-out RMS");
+  for (const CandidateResult& r : diagnosis.ranked) {
+    std::string fitted;
+    for (const auto& [key, value] : r.fitted) fitted += fmt::format("{} {:.4g}  ", key, value);
+    spdlog::info("{:<18} {:>10.1f} {:>12.1f} {:>14.4g}  {}{}", r.law, r.delta_bic,
+                 100.0 * r.improvement, r.held_out_rmse, fitted, r.proposed ? "<- proposed" : "");
+  }
+  spdlog::info("{}", diagnosis.verdict);
+  const HiddenEffect effect = proposed_effect(diagnosis);
+  if (!effect.law.empty()) {
+    std::string snippet = "    bond_law:\n      law: " + effect.law + "\n";
+    for (const auto& [key, value] : effect.parameters) {
+      snippet += fmt::format("      {}: {:.6g}\n", key, value);
+    }
+    spdlog::info("to add it, change the bond_law in config/dem.yaml (keep its other keys):\n{}",
+                 snippet);
+  }
+  spdlog::info("diagnosis: {}", (out / "diagnosis.json").string());
+  return 0;
+}
 
 CLI::App* add_compare_subcommand(CLI::App& app, CompareArgs& args) {
   CLI::App* command = app.add_subcommand("compare", "compare the DEM twin with a measured dataset");
-  command->add_option("dataset", args.dataset, "dataset folder (docs/measurements.md)")->required();
-  command->add_option("--out", args.out, "report folder (default compare_<dataset>)");
-  command->add_option("--dem-config", args.dem_config, "DEM model (default config/dem.yaml)");
-  command->add_option("--radius-mm", args.radius_mm, "sub-particle radius of the twin")
-      ->check(CLI::Range(3.0, 7.0));
-  command->add_option("--threads", args.threads, "engine threads per twin run")
-      ->check(CLI::Range(1, 64));
+  add_model_options(*command, args);
   return command;
 }
 
 int compare_command(const CompareArgs& args) {
-  Dataset dataset;
-  try {
-    dataset = load_dataset(args.dataset);
-  } catch (const DatasetError& error) {
-    spdlog::error("{}", error.what());
-    return 2;
-  }
-  const fs::path dem_config =
-      args.dem_config.empty() ? default_config("dem.yaml") : fs::path(args.dem_config);
-  model_tests::CommonParams common;
-  common.base_spec = dem::load_model_spec(dem_config);
-  common.sub_particle_radius_m = args.radius_mm * 1e-3;
-  common.thread_count = args.threads;
-  std::unique_ptr<TrialModel> model;
-  switch (dataset.experiment) {
-    case ExperimentType::kCompress:
-      model = std::make_unique<TwinCompressModel>(common);
-      break;
-    default:
-      spdlog::error("{}: the twin does not reproduce {} datasets yet (compress only)", args.dataset,
-                    to_string(dataset.experiment));
-      return 2;
-  }
+  const std::optional<WorkbenchInputs> inputs = load_inputs(args);
+  if (!inputs) return 2;
+  const Dataset& dataset = inputs->dataset;
+  std::unique_ptr<TrialModel> model = std::make_unique<TwinCompressModel>(inputs->common);
   spdlog::info("comparing {} ({} trials, {}) with: {}", dataset.name, dataset.trials.size(),
                to_string(dataset.experiment), model->describe());
   const CompareReport report = compare(dataset, *model);
-  const fs::path out = args.out.empty()
-                           ? fs::path("compare_" + fs::path(args.dataset).filename().string())
-                           : fs::path(args.out);
+  const fs::path out = out_folder(args, "compare_");
   write_report(report, out);
   append_history(out / "history.csv", report, utc_now());
   const std::vector<HistoryEntry> history = read_history(out / "history.csv");

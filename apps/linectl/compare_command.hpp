@@ -1,11 +1,17 @@
-// linectl compare (issue 6; docs/measurements.md, docs/workbench.md):
+// The model-versus-measurement workbench's commands (issue 6; docs/measurements.md):
 //   linectl compare DATASET [--out DIR] [--dem-config config/dem.yaml] [--radius-mm 7]
-// runs the DEM twin under the dataset's conditions, writes DIR/report.html and
-// DIR/report.json, and appends the run to DIR/history.csv (plotted in DIR/history.svg), so
-// that a user adding an effect to the model watches the error fall across runs.
+//     runs the DEM twin under the dataset's conditions, writes DIR/report.html and
+//     DIR/report.json, and appends the run to DIR/history.csv (plotted in DIR/history.svg), so
+//     that a user adding an effect to the model watches the error fall across runs.
+//   linectl diagnose DATASET [--out DIR] [...]
+//     fits each candidate effect the model lacks and says which one explains the failure
+//     (DIR/diagnosis.json), with the config/dem.yaml change that adds it.
+//   linectl dataset generate --out DIR [--effect random|none|LAW] [--seed N]
+//     a synthetic compress dataset with a hidden effect; the truth in DIR.truth.yaml.
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <cstdint>
 #include <string>
 
 namespace fl::apps {
@@ -18,8 +24,21 @@ struct CompareArgs {
   int threads = 1;
 };
 
+struct GenerateArgs {
+  std::string out;
+  std::string effect = "random";
+  std::uint64_t seed = 1;
+  double force_noise_n = 0.01;
+};
+
 CLI::App* add_compare_subcommand(CLI::App& app, CompareArgs& args);
+// The same options as compare.
+CLI::App* add_diagnose_subcommand(CLI::App& app, CompareArgs& args);
+CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args);
 // 0: compared (whatever the error); 2: the dataset or the model config is unusable.
 int compare_command(const CompareArgs& args);
+// 0: diagnosed (an effect proposed or not); 2: unusable dataset or config.
+int diagnose_command(const CompareArgs& args);
+int generate_command(const GenerateArgs& args);
 
 }  // namespace fl::apps

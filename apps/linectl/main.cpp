@@ -285,6 +285,10 @@ int main(int argc, char** argv) {
   CLI::App* control = add_control_subcommand(app, control_args);
   CompareArgs compare_args;
   CLI::App* compare = add_compare_subcommand(app, compare_args);
+  CompareArgs diagnose_args;
+  CLI::App* diagnose = add_diagnose_subcommand(app, diagnose_args);
+  GenerateArgs generate_args;
+  CLI::App* dataset = add_dataset_subcommand(app, generate_args);
 
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
@@ -297,6 +301,8 @@ int main(int argc, char** argv) {
     if (twin_serve->parsed()) return twin_serve_command(twin_args);
     if (control->parsed()) return control_command(control_args);
     if (compare->parsed()) return compare_command(compare_args);
+    if (diagnose->parsed()) return diagnose_command(diagnose_args);
+    if (dataset->parsed()) return generate_command(generate_args);
     if (check->parsed()) {
       fl::load_line_config(check_path);
       spdlog::info("{}: valid", check_path);

@@ -1,0 +1,80 @@
+// Which physical effect is missing? For each candidate effect of the effect library that the
+// model lacks, fit its parameters to the dataset (bounded, derivative-free least squares with
+// NLopt's BOBYQA over the DEM twin), then judge it two ways: the Bayesian information
+// criterion over all trials (the fit must pay for its parameters) and the error on a trial
+// left out of the fit (it must predict, not memorise). A candidate is proposed only when both
+// say so, so residuals at the noise level get no effect.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "fl/twin/model_tests/fixtures.hpp"
+#include "fl/workbench/dataset.hpp"
+#include "fl/workbench/generator.hpp"
+
+namespace fl::workbench {
+
+struct ParameterBound {
+  std::string name;
+  double min = 0.0;
+  double max = 0.0;
+  bool log = false;  // searched on a log scale (stiffnesses, time constants)
+};
+
+struct EffectCandidate {
+  std::string law;  // a bond law of the effect library
+  std::vector<ParameterBound> parameters;
+};
+
+// The effect library's candidates for a compression dataset, with bounds wide enough for any
+// fillet (three to four decades), not the generator's ranges.
+std::vector<EffectCandidate> compress_candidates();
+
+struct CandidateResult {
+  std::string law;
+  dem::LawParameters fitted;   // the effect's own parameters
+  double rss = 0.0;            // sum of squared residuals over all trials, SI^2
+  double bic = 0.0;            // n ln(rss / n) + k ln n
+  double delta_bic = 0.0;      // against the base model (< 0: better)
+  double held_out_rmse = 0.0;  // on the trial left out of the fit
+  double improvement = 0.0;    // 1 - rmse / base rmse, all trials
+  bool proposed = false;
+  int evaluations = 0;
+};
+
+struct Diagnosis {
+  std::string channel;  // the channel judged ("force")
+  std::size_t samples = 0;
+  double base_rmse = 0.0;
+  double base_bic = 0.0;
+  double base_held_out_rmse = 0.0;
+  double noise_si = 0.0;
+  std::string held_out_trial;
+  std::vector<CandidateResult> ranked;  // best (lowest BIC) first
+  // "bpm_viscoelastic explains it: ..." or "nothing missing: ...".
+  std::string verdict;
+};
+
+struct DiagnoseOptions {
+  int max_evaluations = 100;  // per candidate
+  int threads = 2;           // candidates fitted at once
+  // Proposed when BIC falls by more than this (Kass and Raftery: > 10 is very strong) and
+  // the held-out error falls by more than min_held_out_gain.
+  double min_bic_drop = 10.0;
+  double min_held_out_gain = 0.2;
+};
+
+// Throws std::invalid_argument for a dataset it cannot diagnose (compress only, two trials
+// or more so one can be held out).
+Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base,
+                   const std::vector<EffectCandidate>& candidates,
+                   const DiagnoseOptions& options = {});
+
+// The proposed effect as a HiddenEffect-style law change of the base model (empty law when
+// nothing is proposed).
+HiddenEffect proposed_effect(const Diagnosis& diagnosis);
+[[nodiscard]] std::string diagnosis_json(const Diagnosis& diagnosis);
+
+}  // namespace fl::workbench

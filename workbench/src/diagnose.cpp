@@ -1,0 +1,282 @@
+#include "fl/workbench/diagnose.hpp"
+
+#include <nlopt.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+#include "fl/twin/dem/config.hpp"
+#include "fl/workbench/twin_models.hpp"
+
+namespace fl::workbench {
+namespace {
+
+constexpr std::string_view kChannel = "force";
+
+struct Residuals {
+  double rss = 0.0;
+  std::size_t samples = 0;
+};
+
+// Sum of squared force residuals of a model over the chosen trials.
+Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& common,
+                    const std::vector<std::size_t>& trials) {
+  TwinCompressModel model(common);
+  Residuals r;
+  for (const std::size_t index : trials) {
+    const Trial& trial = dataset.trials[index];
+    const Table predicted = model.run(dataset, trial);
+    const std::vector<double>& measured = trial.data.at(kChannel).values_si;
+    const std::vector<double>& modelled = predicted.at(kChannel).values_si;
+    for (std::size_t k = 0; k < measured.size(); ++k) {
+      const double e = modelled[k] - measured[k];
+      r.rss += e * e;
+    }
+    r.samples += measured.size();
+  }
+  return r;
+}
+
+double bic(double rss, std::size_t samples, std::size_t parameters) {
+  const auto n = static_cast<double>(samples);
+  return n * std::log(std::max(rss, 1e-300) / n) + static_cast<double>(parameters) * std::log(n);
+}
+
+double from_unit(const ParameterBound& bound, double u) {
+  return bound.log ? bound.min * std::pow(bound.max / bound.min, u)
+                   : bound.min + u * (bound.max - bound.min);
+}
+
+struct FitContext {
+  const Dataset* dataset = nullptr;
+  const model_tests::CommonParams* base = nullptr;
+  const EffectCandidate* candidate = nullptr;
+  const std::vector<std::size_t>* trials = nullptr;
+  int evaluations = 0;
+  double best_rss = std::numeric_limits<double>::infinity();
+};
+
+model_tests::CommonParams with_effect(const model_tests::CommonParams& base,
+                                      const EffectCandidate& candidate, const double* unit_point) {
+  HiddenEffect effect;
+  effect.law = candidate.law;
+  for (std::size_t p = 0; p < candidate.parameters.size(); ++p) {
+    effect.parameters[candidate.parameters[p].name] =
+        from_unit(candidate.parameters[p], unit_point[p]);
+  }
+  model_tests::CommonParams common = base;
+  common.base_spec = with_bond_effect(base.base_spec, effect);
+  return common;
+}
+
+double objective(unsigned n, const double* x, double* gradient, void* data) {
+  (void)n;
+  (void)gradient;  // derivative-free
+  auto& context = *static_cast<FitContext*>(data);
+  ++context.evaluations;
+  try {
+    const double rss = residuals(*context.dataset,
+                                 with_effect(*context.base, *context.candidate, x), *context.trials)
+                           .rss;
+    context.best_rss = std::min(context.best_rss, rss);
+    return std::isfinite(rss) ? rss : 1e300;
+  } catch (const std::exception& error) {
+    // A parameter set the engine refuses (an unstable timestep, say) is a bad point, not the
+    // end of the search.
+    spdlog::debug("diagnose: {} refused a point: {}", context.candidate->law, error.what());
+    return 1e300;
+  }
+}
+
+CandidateResult fit(const Dataset& dataset, const model_tests::CommonParams& base,
+                    const EffectCandidate& candidate, const std::vector<std::size_t>& fit_trials,
+                    const std::vector<std::size_t>& all_trials, std::size_t held_out,
+                    const DiagnoseOptions& options) {
+  const auto dimensions = static_cast<unsigned>(candidate.parameters.size());
+  FitContext context{&dataset, &base, &candidate, &fit_trials};
+  std::vector<double> x(dimensions, 0.5);  // the middle of each (log) range
+  std::vector<double> lower(dimensions, 0.0);
+  std::vector<double> upper(dimensions, 1.0);
+  // BOBYQA needs two or more dimensions; one parameter goes to a bounded Nelder-Mead.
+  nlopt_opt optimiser =
+      nlopt_create(dimensions >= 2 ? NLOPT_LN_BOBYQA : NLOPT_LN_NELDERMEAD, dimensions);
+  nlopt_set_lower_bounds(optimiser, lower.data());
+  nlopt_set_upper_bounds(optimiser, upper.data());
+  nlopt_set_min_objective(optimiser, objective, &context);
+  nlopt_set_maxeval(optimiser, options.max_evaluations);
+  nlopt_set_xtol_rel(optimiser, 1e-3);
+  std::vector<double> step(dimensions, 0.25);
+  nlopt_set_initial_step(optimiser, step.data());
+  double best = 0.0;
+  const nlopt_result status = nlopt_optimize(optimiser, x.data(), &best);
+  nlopt_destroy(optimiser);
+  if (status < 0) {
+    spdlog::warn("diagnose: {}: the optimiser stopped with status {}", candidate.law,
+                 static_cast<int>(status));
+  }
+  CandidateResult result;
+  result.law = candidate.law;
+  result.evaluations = context.evaluations;
+  for (std::size_t p = 0; p < dimensions; ++p) {
+    result.fitted[candidate.parameters[p].name] = from_unit(candidate.parameters[p], x[p]);
+  }
+  const model_tests::CommonParams fitted = with_effect(base, candidate, x.data());
+  const Residuals all = residuals(dataset, fitted, all_trials);
+  result.rss = all.rss;
+  result.bic = bic(all.rss, all.samples, dimensions);
+  const Residuals out = residuals(dataset, fitted, {held_out});
+  result.held_out_rmse = std::sqrt(out.rss / static_cast<double>(out.samples));
+  return result;
+}
+
+}  // namespace
+
+std::vector<EffectCandidate> compress_candidates() {
+  return {
+      {"bpm_viscoelastic",
+       {{"relaxation_stiffness_n_per_m3", 1e4, 1e8, true},
+        {"relaxation_time_s", 1e-3, 10.0, true}}},
+      {"bpm_plastic", {{"normal_yield_strength_pa", 1.0, 1e4, true}}},
+  };
+}
+
+Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base,
+                   const std::vector<EffectCandidate>& candidates, const DiagnoseOptions& options) {
+  if (dataset.experiment != ExperimentType::kCompress) {
+    throw std::invalid_argument("diagnose handles compress datasets so far, not " +
+                                std::string(to_string(dataset.experiment)));
+  }
+  if (dataset.trials.size() < 2) {
+    throw std::invalid_argument("diagnose needs two trials or more: one is held out");
+  }
+  Diagnosis diagnosis;
+  diagnosis.channel = std::string(kChannel);
+  const auto noise = dataset.noise_si.find(kChannel);
+  diagnosis.noise_si = noise == dataset.noise_si.end() ? 0.0 : noise->second;
+  // The fastest trial is held out (the last one at the highest rate when rates differ): a
+  // fit on the slower ones must predict it.
+  std::vector<std::size_t> all_trials(dataset.trials.size());
+  for (std::size_t k = 0; k < all_trials.size(); ++k) all_trials[k] = k;
+  std::size_t held_out = all_trials.back();
+  double fastest = -1.0;
+  for (const std::size_t k : all_trials) {
+    const auto rate = dataset.trials[k].conditions.find("rate");
+    if (rate != dataset.trials[k].conditions.end() && std::get<double>(rate->second) > fastest) {
+      fastest = std::get<double>(rate->second);
+      held_out = k;
+    }
+  }
+  diagnosis.held_out_trial = dataset.trials[held_out].id;
+  std::vector<std::size_t> fit_trials;
+  for (const std::size_t k : all_trials) {
+    if (k != held_out) fit_trials.push_back(k);
+  }
+
+  const Residuals base_all = residuals(dataset, base, all_trials);
+  const Residuals base_out = residuals(dataset, base, {held_out});
+  diagnosis.samples = base_all.samples;
+  diagnosis.base_rmse = std::sqrt(base_all.rss / static_cast<double>(base_all.samples));
+  diagnosis.base_bic = bic(base_all.rss, base_all.samples, 0);
+  diagnosis.base_held_out_rmse = std::sqrt(base_out.rss / static_cast<double>(base_out.samples));
+  spdlog::info("diagnose: base model RMS {:.4g} N over {} samples, held out '{}'",
+               diagnosis.base_rmse, diagnosis.samples, diagnosis.held_out_trial);
+
+  // Candidates in parallel: each fit runs its own twins, nothing shared but the inputs.
+  std::vector<CandidateResult> results(candidates.size());
+  std::mutex next_mutex;
+  std::size_t next = 0;
+  const auto worker = [&] {
+    for (;;) {
+      std::size_t index = 0;
+      {
+        const std::lock_guard<std::mutex> lock(next_mutex);
+        if (next == candidates.size()) return;
+        index = next++;
+      }
+      results[index] =
+          fit(dataset, base, candidates[index], fit_trials, all_trials, held_out, options);
+      spdlog::info("diagnose: {} fitted in {} twin evaluations", candidates[index].law,
+                   results[index].evaluations);
+    }
+  };
+  std::vector<std::thread> threads;
+  const int thread_count =
+      std::clamp(options.threads, 1, static_cast<int>(std::max<std::size_t>(candidates.size(), 1)));
+  for (int t = 0; t < thread_count; ++t) threads.emplace_back(worker);
+  for (std::thread& thread : threads) thread.join();
+
+  for (CandidateResult& result : results) {
+    result.delta_bic = result.bic - diagnosis.base_bic;
+    const double rmse = std::sqrt(result.rss / static_cast<double>(diagnosis.samples));
+    result.improvement = diagnosis.base_rmse > 0.0 ? 1.0 - rmse / diagnosis.base_rmse : 0.0;
+    const double held_out_gain = diagnosis.base_held_out_rmse > 0.0
+                                     ? 1.0 - result.held_out_rmse / diagnosis.base_held_out_rmse
+                                     : 0.0;
+    result.proposed =
+        result.delta_bic < -options.min_bic_drop && held_out_gain > options.min_held_out_gain;
+  }
+  std::sort(results.begin(), results.end(),
+            [](const CandidateResult& a, const CandidateResult& b) { return a.bic < b.bic; });
+  // Only the best may be proposed: the effects compete to explain the same residual.
+  for (std::size_t k = 1; k < results.size(); ++k) results[k].proposed = false;
+  diagnosis.ranked = std::move(results);
+
+  std::ostringstream verdict;
+  verdict.precision(3);
+  if (!diagnosis.ranked.empty() && diagnosis.ranked.front().proposed) {
+    const CandidateResult& best = diagnosis.ranked.front();
+    verdict << best.law << " explains the failure: RMS error falls by " << 100.0 * best.improvement
+            << " % (held-out trial '" << diagnosis.held_out_trial << "' "
+            << diagnosis.base_held_out_rmse << " -> " << best.held_out_rmse << "), BIC by "
+            << -best.delta_bic;
+  } else {
+    verdict << "nothing missing among the candidates: base RMS " << diagnosis.base_rmse;
+    if (diagnosis.noise_si > 0.0) verdict << " against noise " << diagnosis.noise_si;
+    verdict << "; no effect lowers the BIC by " << options.min_bic_drop
+            << " and the held-out error by " << 100.0 * options.min_held_out_gain << " %";
+  }
+  diagnosis.verdict = verdict.str();
+  return diagnosis;
+}
+
+HiddenEffect proposed_effect(const Diagnosis& diagnosis) {
+  HiddenEffect effect;
+  if (!diagnosis.ranked.empty() && diagnosis.ranked.front().proposed) {
+    effect.law = diagnosis.ranked.front().law;
+    effect.parameters = diagnosis.ranked.front().fitted;
+  }
+  return effect;
+}
+
+std::string diagnosis_json(const Diagnosis& diagnosis) {
+  nlohmann::json json{{"channel", diagnosis.channel},
+                      {"samples", diagnosis.samples},
+                      {"noise_si", diagnosis.noise_si},
+                      {"base_rmse_si", diagnosis.base_rmse},
+                      {"base_bic", diagnosis.base_bic},
+                      {"held_out_trial", diagnosis.held_out_trial},
+                      {"base_held_out_rmse_si", diagnosis.base_held_out_rmse},
+                      {"verdict", diagnosis.verdict}};
+  nlohmann::json ranked = nlohmann::json::array();
+  for (const CandidateResult& r : diagnosis.ranked) {
+    ranked.push_back({{"law", r.law},
+                      {"fitted", r.fitted},
+                      {"rss", r.rss},
+                      {"bic", r.bic},
+                      {"delta_bic", r.delta_bic},
+                      {"held_out_rmse_si", r.held_out_rmse},
+                      {"improvement", r.improvement},
+                      {"proposed", r.proposed},
+                      {"evaluations", r.evaluations}});
+  }
+  json["ranked"] = ranked;
+  return json.dump(1);
+}
+
+}  // namespace fl::workbench
