@@ -53,6 +53,11 @@ constexpr std::uint32_t kDriveProfile = 402;
 constexpr std::uint32_t kIoProfile = 401;
 
 std::int16_t to_analog_counts(float value, float units_per_count) {
+  // A NaN command has no count; the output's zero is its safe value (found by fuzzing: the
+  // conversion of NaN to an integer is undefined behaviour).
+  if (std::isnan(value)) {
+    return 0;
+  }
   const double counts =
       std::round(static_cast<double>(value) / static_cast<double>(units_per_count));
   return static_cast<std::int16_t>(std::clamp(counts, -32768.0, 32767.0));
@@ -144,6 +149,9 @@ void CanopenIo::build_routes() {
 
 std::int32_t CanopenIo::velocity_to_drive_units(DriveId drive, float speed_mps) const {
   const DriveNodeConfig& node = config_.drives[index(drive)];
+  if (std::isnan(speed_mps)) {
+    return 0;  // no target is a standstill, never an undefined conversion (found by fuzzing)
+  }
   const double limited =
       std::clamp(static_cast<double>(speed_mps), -static_cast<double>(node.max_speed_mps),
                  static_cast<double>(node.max_speed_mps));

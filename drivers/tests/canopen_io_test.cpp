@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "loopback_rig.hpp"
 #include "scan_thread_probe.hpp"
@@ -139,6 +140,29 @@ TEST(CanopenIo, IoModulesMapToTheProcessImage) {
   EXPECT_EQ(rig.module(IoModuleId::kInfeed).state().analog_outputs[0], 9000);
   EXPECT_EQ(rig.module(IoModuleId::kInfeed).state().analog_outputs[1], 1200);
   EXPECT_EQ(rig.module(IoModuleId::kSafety).state().digital_outputs, 0x01);  // running lamp
+}
+
+// Found by fuzz/fuzz_can_frames (corpus file regression_nan_analogue_output): a NaN in the
+// output image reached a float-to-integer conversion in write(), undefined behaviour. A NaN
+// command now goes out as zero: the analogue output's safe value, the drive's standstill.
+TEST(CanopenIo, NotANumberCommandGoesOutAsZero) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  OutputImage out = all_drives(true, 0.2F);
+  out.drives[index(DriveId::kGuide)].speed_mps = nan;
+  out.drives[index(DriveId::kGuide)].accel_mps2 = nan;
+  out.hopper_opening_mm = nan;
+  out.leveller_speed_rpm = 120.0F;
+  out.centring_shift_mm = nan;
+  rig.scan(out);
+  rig.scan(out);
+  EXPECT_EQ(rig.drive(DriveId::kGuide).state().target_velocity, 0);
+  EXPECT_EQ(rig.drive(DriveId::kTakt).state().target_velocity, 2000);
+  EXPECT_EQ(rig.drive(DriveId::kGuide).state().acceleration, 50000U);  // NaN ramp: the limit
+  EXPECT_EQ(rig.module(IoModuleId::kInfeed).state().analog_outputs[0], 0);
+  EXPECT_EQ(rig.module(IoModuleId::kInfeed).state().analog_outputs[1], 1200);
+  EXPECT_EQ(rig.module(IoModuleId::kStations).state().analog_outputs[0], 0);
 }
 
 TEST(CanopenIo, LostDriveFaultsWithinItsTimeoutAndRecovers) {

@@ -1,10 +1,14 @@
 #include "fl/controller/yaml_reader.hpp"
 
+#include <yaml-cpp/eventhandler.h>
+#include <yaml-cpp/parser.h>
+
 #include <algorithm>
 #include <charconv>
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <sstream>
 #include <system_error>
 #include <utility>
 
@@ -225,6 +229,51 @@ std::size_t edit_distance(std::string_view a, std::string_view b) {
   return previous[b.size()];
 }
 
+// Walks a YAML stream's documents without building nodes, to find where the parser stops
+// advancing. yaml-cpp 0.7 (Debian 12) has a parser that, on a token no node can start with
+// (a ',' outside any flow collection), reports an empty document without consuming the token,
+// again and again: YAML::LoadAll then never returns and grows without bound (upstream issue
+// jbeder/yaml-cpp#1040, fixed after 0.8.0; found by fuzz/fuzz_line_config). Two documents
+// that start at the same position are that loop.
+class DocumentWalker final : public YAML::EventHandler {
+ public:
+  // The mark the parser is stuck at, or nothing when the stream ends normally. Throws what
+  // the parser throws for a syntax error.
+  static std::optional<YAML::Mark> find_stuck_parser(const std::string& text) {
+    std::istringstream stream(text);
+    YAML::Parser parser(stream);
+    DocumentWalker walker;
+    while (parser.HandleNextDocument(walker)) {
+      if (walker.stuck_) {
+        return walker.previous_start_;
+      }
+    }
+    return std::nullopt;
+  }
+
+  void OnDocumentStart(const YAML::Mark& mark) override {
+    stuck_ = started_ && mark.pos == previous_start_.pos;
+    started_ = true;
+    previous_start_ = mark;
+  }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+
+ private:
+  bool started_ = false;
+  bool stuck_ = false;
+  YAML::Mark previous_start_ = YAML::Mark::null_mark();
+};
+
 }  // namespace
 
 // ---------------------------------------------------------------- reader state
@@ -258,6 +307,11 @@ struct YamlReader::State {
   void parse(const std::string& text) {
     std::vector<YAML::Node> documents;
     try {
+      if (const auto stuck = DocumentWalker::find_stuck_parser(text)) {
+        add("", *stuck, ProblemKind::kSyntax,
+            "no YAML value can start here (a ',' outside [ ] or { }?)");
+        return;
+      }
       documents = YAML::LoadAll(text);
     } catch (const YAML::ParserException& error) {
       add("", error.mark, ProblemKind::kSyntax, error.msg);

@@ -88,7 +88,12 @@ DriveId Tracker::drive_at(float s_mm) const {
 void Tracker::advance(const InputImage& in) {
   for (std::size_t d = 0; d < kDriveCount; ++d) {
     const std::int64_t counts = in.drives[d].encoder_counts;
-    const std::int64_t delta = first_advance_ ? 0 : counts - last_counts_[d];
+    // Modulo 2^64, as a counter wraps: a corrupt or reset counter (from a DDS sample, found
+    // by fuzzing) makes a wild jump, never a signed overflow.
+    const auto delta = first_advance_
+                           ? std::int64_t{0}
+                           : static_cast<std::int64_t>(static_cast<std::uint64_t>(counts) -
+                                                       static_cast<std::uint64_t>(last_counts_[d]));
     last_counts_[d] = counts;
     travel_mm_[d] = static_cast<float>(delta) / config_.limits[d].counts_per_mm;
   }

@@ -251,6 +251,20 @@ TEST(YamlReader, SyntaxErrorHasPosition) {
   EXPECT_THAT(problem.to_string(), HasSubstr("invalid YAML syntax"));
 }
 
+// Found by fuzz/fuzz_line_config (corpus file regression_stray_comma): yaml-cpp 0.7's LoadAll
+// never returns on a stray ',' and grows without bound; the reader reports a syntax error.
+TEST(YamlReader, StrayCommaIsASyntaxErrorNotAHang) {
+  for (const char* text : {",\xb9", ",", "# comment\n, a\n", "a: 1\n---\n,b\n"}) {
+    SCOPED_TRACE(text);
+    YamlReader reader = YamlReader::from_text(text, "t.yaml");
+    ASSERT_EQ(reader.problems().size(), 1U);
+    EXPECT_EQ(reader.problems().front().kind, ProblemKind::kSyntax);
+    EXPECT_THAT(reader.problems().front().to_string(), HasSubstr("no YAML value can start here"));
+  }
+  // A comma inside a flow collection stays valid.
+  EXPECT_THAT(messages(YamlReader::from_text("a: [1, 2]\n", "t.yaml")), IsEmpty());
+}
+
 TEST(YamlReader, DocumentShapes) {
   EXPECT_THAT(messages(YamlReader::from_text("", "t.yaml")),
               ElementsAre("t.yaml: empty file: no YAML document in the file"));

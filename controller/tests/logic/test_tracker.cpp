@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "test_support.hpp"
@@ -24,6 +26,22 @@ TEST_F(TrackerTest, ItemsMoveWithTheEncoderOfTheBeltUnderThem) {
   h.tracker.advance(h.in);
   EXPECT_FLOAT_EQ(on_transition->s_mm, 103.0F);
   EXPECT_FLOAT_EQ(on_guide->s_mm, 1505.0F);
+}
+
+// Found by fuzz/fuzz_dds_samples: encoder counts from a corrupt DriveFeedback sample, one
+// scan at the most negative and the next at the most positive count, overflowed the signed
+// difference (undefined behaviour, reported by UBSan). The difference now wraps as a counter
+// does; the tracker stays usable.
+TEST_F(TrackerTest, EncoderJumpAcrossTheWholeRangeDoesNotOverflow) {
+  h.tracker.create(0, 100.0F, false);
+  h.in.drives[index(DriveId::kTransition1)].encoder_counts = -7289967886237117241;
+  h.tracker.advance(h.in);
+  h.in.drives[index(DriveId::kTransition1)].encoder_counts = 7545419121571575478;
+  h.tracker.advance(h.in);
+  h.in.drives[index(DriveId::kTransition1)].encoder_counts =
+      std::numeric_limits<std::int64_t>::min();
+  h.tracker.advance(h.in);
+  EXPECT_TRUE(std::isfinite(h.tracker.create(0, 10.0F, false)->s_mm));
 }
 
 TEST_F(TrackerTest, MultilaneItemMovesAtTheMeanOfBothBelts) {
