@@ -306,9 +306,17 @@ std::size_t LineController::tracked_items(std::span<TrackedItemView> out) const 
   std::size_t count = 0;
   for (const Item& item : impl_->tracker.items()) {
     if (!item.active || count == out.size()) continue;
-    out[count++] =
+    TrackedItemView& view = out[count++];
+    view =
         TrackedItemView{item.id,          item.s_mm,           item.y_mm,          item.angle_rad,
                         item.angle_known, item.reject_pending, item.multilane_unit};
+    view.hand = item.hand;
+    view.side = item.side;
+    view.classified = item.classified;
+    view.flip_plate1 = item.flip1;
+    view.flip_plate2 = item.flip2;
+    view.orienting_done = item.orienting_done;
+    view.reject_reason = item.reject_reason;
   }
   return count;
 }

@@ -346,12 +346,15 @@ RuntimeFault ScanRuntime::scan_loop() {
       stats_.record_overrun(missed_periods, consecutive_overruns);
       logic_.on_overrun(OverrunInfo{scheduled_ns, finished_ns, missed_periods, consecutive_overruns,
                                     overrun_count});
-      if (options_.overrun_fault_consecutive > 0 &&
-          consecutive_overruns >= options_.overrun_fault_consecutive) {
-        return RuntimeFault::kConsecutiveOverruns;
-      }
     } else {
       consecutive_overruns = 0;
+    }
+    logic_.after_scan(input_, output_,
+                      ScanTimingSample{period_ns, woke_ns - scheduled_ns, finished_ns - woke_ns,
+                                       scan_count, overrun_count});
+    if (options_.overrun_fault_consecutive > 0 &&
+        consecutive_overruns >= options_.overrun_fault_consecutive) {
+      return RuntimeFault::kConsecutiveOverruns;
     }
     scheduled_ns = next_ns;
     if (options_.max_scans > 0 && scan_count >= options_.max_scans) break;

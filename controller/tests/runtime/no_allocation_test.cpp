@@ -11,6 +11,7 @@
 
 #include "fl/controller/line_config.hpp"
 #include "fl/controller/line_controller.hpp"
+#include "fl/controller/line_status.hpp"
 #include "fl/controller/runtime.hpp"
 #include "runtime_test_support.hpp"
 #include "scan_thread_probe.hpp"
@@ -171,6 +172,8 @@ TEST(RealTimeCycle, RuntimeWithTheLineControllerNeitherAllocatesNorLocks) {
   const LineConfig config = default_line_config();
   LineController controller(config);
   LineControllerLogic logic(controller);
+  LineStatusPublisher status;  // the HMI's snapshots are published in the cycle too
+  logic.attach_status(&status);
   LoopbackIo io(config);
   ScanRuntime runtime(io, logic,
                       RuntimeOptions{.period_ns = kPeriodNs,
@@ -183,6 +186,9 @@ TEST(RealTimeCycle, RuntimeWithTheLineControllerNeitherAllocatesNorLocks) {
   EXPECT_EQ(controller.counters().scans, kScans);
   EXPECT_TRUE(io.saw_running());
   EXPECT_GT(controller.counters().frames_processed, 0U);
+  ASSERT_TRUE(status.buffer().take());
+  EXPECT_EQ(status.buffer().front().timing.scans, kScans);
+  EXPECT_EQ(status.buffer().front().counters.scans, kScans);
   EXPECT_EQ(probe_counts().allocations, 0U);
   EXPECT_EQ(probe_counts().deallocations, 0U);
   EXPECT_EQ(probe_counts().mutex_locks, 0U);

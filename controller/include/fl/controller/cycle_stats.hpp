@@ -90,6 +90,15 @@ struct CycleStatsSummary {
   DistributionSummary compute;         // read + update + write
 };
 
+// What the runtime measured of one scan, as it hands it to ScanLogic::after_scan.
+struct ScanTimingSample {
+  std::int64_t period_ns = 0;
+  std::int64_t wakeup_latency_ns = 0;  // actual minus scheduled wake-up
+  std::int64_t compute_ns = 0;         // read + update + write
+  std::uint64_t scans = 0;             // since start, this one included
+  std::uint64_t overruns = 0;
+};
+
 class CycleStats {
  public:
   explicit CycleStats(std::int64_t bin_width_ns = DurationHistogram::kDefaultBinWidthNs,

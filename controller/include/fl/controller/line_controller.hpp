@@ -56,6 +56,13 @@ struct TrackedItemView {
   bool angle_known = false;
   bool reject_pending = false;
   std::int8_t multilane_unit = -1;
+  Hand hand = Hand::kUnknown;
+  SideUp side = SideUp::kUnknown;  // side up after the flips planned so far
+  bool classified = false;         // camera 1 has decided hand, side and flips
+  bool flip_plate1 = false;        // planned flips
+  bool flip_plate2 = false;
+  bool orienting_done = false;                  // the multilane unit has turned it
+  Outcome reject_reason = Outcome::kInTransit;  // when reject_pending
 };
 
 inline constexpr std::size_t kMaxTrackedItems = 64;

@@ -4,9 +4,9 @@
 // safe state when the scan thread stalls. The interfaces follow ros2_control: hardware
 // (drivers, plants) implements ProcessIo, the controller implements ScanLogic.
 //
-// Inside the cycle (ProcessIo::read/write, ScanLogic::update/on_overrun and the runtime's own
-// bookkeeping) nothing allocates, locks or blocks; controller/tests/runtime checks it by
-// counting operator new and mutex locks on the scan thread.
+// Inside the cycle (ProcessIo::read/write, ScanLogic::update/on_overrun/after_scan and the
+// runtime's own bookkeeping) nothing allocates, locks or blocks; controller/tests/runtime
+// checks it by counting operator new and mutex locks on the scan thread.
 #pragma once
 
 #include <atomic>
@@ -23,6 +23,7 @@
 namespace fl {
 
 class LineController;
+class LineStatusPublisher;
 
 // The hardware side of a scan: field bus drivers, the DDS bridge, or a plant in simulation.
 class ProcessIo {
@@ -68,6 +69,11 @@ class ScanLogic {
   // before the next update(). Real-time. The skipped periods also show in in.time_ns, which
   // jumps by (missed_periods + 1) periods.
   virtual void on_overrun(const OverrunInfo& /*info*/) {}
+
+  // Called on the scan thread after every scan's write() with the images and the scan's
+  // measured timing (for status snapshots). Real-time.
+  virtual void after_scan(const InputImage& /*in*/, const OutputImage& /*out*/,
+                          const ScanTimingSample& /*timing*/) {}
 };
 
 // Adapter from the line's logic to the runtime. LineController has no overrun input of its
@@ -80,6 +86,12 @@ class LineControllerLogic final : public ScanLogic {
 
   void update(const InputImage& in, OutputImage& out) override;
   void on_overrun(const OverrunInfo& info) override;
+  void after_scan(const InputImage& in, const OutputImage& out,
+                  const ScanTimingSample& timing) override;
+
+  // Publish a LineStatus snapshot after every scan (the HMI reads them). Call before the
+  // runtime starts; the publisher must outlive the runtime.
+  void attach_status(LineStatusPublisher* publisher) noexcept { status_ = publisher; }
 
   // Any thread.
   void request_start() noexcept { start_requested_.store(true, std::memory_order_release); }
@@ -94,6 +106,7 @@ class LineControllerLogic final : public ScanLogic {
 
  private:
   LineController& controller_;
+  LineStatusPublisher* status_ = nullptr;
   std::atomic<bool> start_requested_{false};
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> ack_requested_{false};
