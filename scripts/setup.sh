@@ -11,7 +11,9 @@ packages=(
   libopencv-dev cyclonedds-dev cyclonedds-tools openssl
   rt-tests python3
   qemu-system-x86 busybox-static can-utils
-  libzstd-dev liblz4-dev
+  libzstd-dev liblz4-dev libnlopt-dev
+  dpkg-dev debootstrap systemd
+  libcivetweb-dev libssl-dev chromium
 )
 
 missing=()
@@ -44,4 +46,10 @@ here="$(cd "$(dirname "$0")/.." && pwd)"
 if [[ ! -d "$here/vision/mcap/interop/node_modules/@mcap/core" ]]; then
   echo "setup: installing the MCAP interop test's node modules"
   npm ci --prefix "$here/vision/mcap/interop" --no-audit --no-fund --ignore-scripts
+fi
+# The HMI's end-to-end test drives Debian's chromium with playwright-core (no browser
+# download), pinned by hmi/tests/e2e/package-lock.json.
+if [[ ! -d "$here/hmi/tests/e2e/node_modules/playwright-core" ]]; then
+  echo "setup: installing the HMI end-to-end test's node modules"
+  npm ci --prefix "$here/hmi/tests/e2e" --no-audit --no-fund --ignore-scripts
 fi

@@ -1,5 +1,6 @@
 #include "cli_support.hpp"
 
+#include <cstdlib>
 #include <numbers>
 #include <stdexcept>
 
@@ -9,10 +10,31 @@
 
 namespace fl::apps {
 
+std::vector<std::filesystem::path> config_search_dirs() {
+  std::vector<std::filesystem::path> dirs;
+  if (const char* override_dir = std::getenv("FL_CONFIG_DIR");
+      override_dir != nullptr && *override_dir != '\0') {
+    dirs.emplace_back(override_dir);
+  }
+  dirs.emplace_back(FL_INSTALLED_CONFIG_DIR);
+  dirs.emplace_back(std::filesystem::path(FL_SOURCE_DIR) / "config");
+  return dirs;
+}
+
 std::filesystem::path default_config(const char* file) {
-  const std::filesystem::path source = std::filesystem::path(FL_SOURCE_DIR) / "config" / file;
-  if (std::filesystem::exists(source)) return source;
-  return std::filesystem::path("config") / file;
+  const std::vector<std::filesystem::path> dirs = config_search_dirs();
+  for (const std::filesystem::path& dir : dirs) {
+    std::error_code ignored;  // an unreadable folder is as good as a missing one here
+    if (std::filesystem::is_regular_file(dir / file, ignored)) return dir / file;
+  }
+  std::string searched;
+  for (const std::filesystem::path& dir : dirs) {
+    searched += searched.empty() ? "" : ", ";
+    searched += dir.string();
+  }
+  throw std::runtime_error(std::string("default configuration file ") + file +
+                           " not found; searched (in order): " + searched +
+                           ". Set FL_CONFIG_DIR or name the file on the command line.");
 }
 
 std::unique_ptr<Plant> make_plant(const std::string& name, const std::string& plant_config,
@@ -26,6 +48,20 @@ std::unique_ptr<Plant> make_plant(const std::string& name, const std::string& pl
     const std::filesystem::path file = plant_config.empty() ? default_config("plant_dem.yaml")
                                                             : std::filesystem::path(plant_config);
     return std::make_unique<DemPlant>(line, load_dem_plant_config(file));
+  }
+  throw std::runtime_error("--plant " + name + ": unknown plant (choose fast or dem)");
+}
+
+void check_plant_config(const std::string& name, const std::string& plant_config) {
+  if (name == "fast") {
+    load_fast_plant_config(plant_config.empty() ? default_config("plant_fast.yaml")
+                                                : std::filesystem::path(plant_config));
+    return;
+  }
+  if (name == "dem") {
+    load_dem_plant_config(plant_config.empty() ? default_config("plant_dem.yaml")
+                                               : std::filesystem::path(plant_config));
+    return;
   }
   throw std::runtime_error("--plant " + name + ": unknown plant (choose fast or dem)");
 }
@@ -48,6 +84,10 @@ void LedgerWriter::write(const FilletRecord& r) {
         << r.flip_plate2 << ',' << static_cast<int>(r.multilane_unit) << ','
         << r.angle_at_camera1_rad * kDeg << ',' << r.final_angle_rad * kDeg << ',' << r.final_y_mm
         << '\n';
+}
+
+void LedgerWriter::flush() {
+  if (file_.is_open()) file_.flush();
 }
 
 }  // namespace fl::apps

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "fl/controller/ledger.hpp"
 #include "fl/controller/line_config.hpp"
@@ -13,7 +14,13 @@
 
 namespace fl::apps {
 
-// Default configuration files: beside the sources in a build tree, else ./config.
+// Folders searched for default configuration files, in order: $FL_CONFIG_DIR when set, the
+// installed configuration folder (/etc/fillet-line for a /usr install), then the source
+// tree's config/ (so a build tree and the tests run without installing).
+std::vector<std::filesystem::path> config_search_dirs();
+
+// The first of config_search_dirs() that holds file. Throws std::runtime_error naming the
+// file and every folder searched when none does.
 std::filesystem::path default_config(const char* file);
 
 // "fast" or "dem"; an empty plant_config takes the plant's default file. Throws
@@ -21,12 +28,18 @@ std::filesystem::path default_config(const char* file);
 std::unique_ptr<Plant> make_plant(const std::string& name, const std::string& plant_config,
                                   const LineConfig& line);
 
+// Reads the plant's configuration file (the default one when plant_config is empty) without
+// building the plant; the same errors as make_plant.
+void check_plant_config(const std::string& name, const std::string& plant_config);
+
 // One CSV row per closed ledger record; does nothing when the path is empty. The constructor
 // throws std::runtime_error naming a file it cannot open.
 class LedgerWriter {
  public:
   explicit LedgerWriter(const std::string& path);
   void write(const FilletRecord& record);
+  // Pushes buffered rows to the file, so a stopped or killed service leaves them on disk.
+  void flush();
 
  private:
   std::ofstream file_;

@@ -59,7 +59,7 @@ struct Diagnosis {
 
 struct DiagnoseOptions {
   int max_evaluations = 100;  // per candidate
-  int threads = 2;           // candidates fitted at once
+  int threads = 2;            // candidates fitted at once
   // Proposed when BIC falls by more than this (Kass and Raftery: > 10 is very strong) and
   // the held-out error falls by more than min_held_out_gain.
   double min_bic_drop = 10.0;
