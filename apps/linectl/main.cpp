@@ -2,25 +2,23 @@
 //   linectl run --plant fast --duration 10m --seed 1 [--json kpis.json] [--ledger ledger.csv]
 //   linectl run --realtime ...      the same loop on the 10 ms real-time schedule
 //   linectl run --realtime --duration forever   as the service runs: until SIGTERM or SIGINT
+//   linectl soak [--duration 1h]    a long real-time run judged by memory, deadlines, losses
 //   linectl config check [FILE]     validate a line configuration (and --plant's)
 //   linectl record / replay         camera recordings and their regression replay
 //   (record_replay.hpp)
 //   linectl twin serve / control    the twin and the controller as two processes over DDS
 //   (two_process.hpp)
 #include <spdlog/spdlog.h>
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
-#include <thread>
 
 #include "cli_support.hpp"
 #include "compare_command.hpp"
@@ -37,19 +35,13 @@
 #include "hmi_support.hpp"
 #include "logging.hpp"
 #include "plant_io.hpp"
+#include "realtime_run.hpp"
 #include "record_replay.hpp"
+#include "soak_command.hpp"
 #include "two_process.hpp"
 
 namespace fl::apps {
 namespace {
-
-// SIGINT and SIGTERM counted: the first stops the line and drains it, a second ends the run
-// at once (still writing the ledger and KPIs).
-std::atomic<int> g_stop_signals{0};
-extern "C" void on_signal(int /*signal*/) { g_stop_signals.fetch_add(1); }
-
-// A controlled stop normally empties the belts well within this; past it the run ends anyway.
-constexpr double kDrainTimeoutS = 60.0;
 
 struct RunArgs {
   std::string plant = "fast";
@@ -68,134 +60,6 @@ struct RunArgs {
   double frame_every_s = 0.04;
   std::string hmi_config;  // --realtime: serve the operator HMI with this config
 };
-
-// Progress on stderr: a redrawn line on a terminal, a log line every 10 % otherwise.
-class Progress {
- public:
-  explicit Progress(bool quiet) : quiet_(quiet), tty_(isatty(STDERR_FILENO) != 0) {}
-  void operator()(double done_s, double total_s) {
-    if (quiet_ || total_s <= 0.0 || !std::isfinite(total_s)) return;
-    const int percent = static_cast<int>(100.0 * std::min(done_s / total_s, 1.0));
-    if (tty_) {
-      std::fprintf(stderr, "\r[%-40s] %3d%%  %.0f / %.0f s line time",
-                   std::string(static_cast<std::size_t>(percent * 40 / 100), '#').c_str(), percent,
-                   done_s, total_s);
-      std::fflush(stderr);
-    } else if (percent / 10 != last_decile_) {
-      last_decile_ = percent / 10;
-      spdlog::info("progress {}% ({:.0f} of {:.0f} s line time)", percent, done_s, total_s);
-    }
-  }
-  void finish() {
-    if (!quiet_ && tty_) std::fprintf(stderr, "\n");
-  }
-
- private:
-  bool quiet_;
-  bool tty_;
-  int last_decile_ = -1;
-};
-
-void log_event(const Event& event) {
-  switch (event.code) {
-    case EventCode::kItemCreated:
-    case EventCode::kItemClosed:
-    case EventCode::kItemAdopted:
-    case EventCode::kRejectReversal:
-      spdlog::debug("{} item {} at {:.3f} s ({:.1f})", to_string(event.code), event.item_id,
-                    static_cast<double>(event.time_ns) / 1e9, event.value);
-      break;
-    case EventCode::kFaultRaised:
-      spdlog::warn("fault raised: {} at {:.3f} s", to_string(static_cast<FaultCode>(event.source)),
-                   static_cast<double>(event.time_ns) / 1e9);
-      break;
-    case EventCode::kFaultCleared:
-      spdlog::info("fault cleared: {} at {:.3f} s", to_string(static_cast<FaultCode>(event.source)),
-                   static_cast<double>(event.time_ns) / 1e9);
-      break;
-    case EventCode::kStateChanged:
-      spdlog::info("line state {} at {:.3f} s", static_cast<int>(event.source),
-                   static_cast<double>(event.time_ns) / 1e9);
-      break;
-    default:
-      spdlog::warn("{} (camera/drive {}, item {}, value {:.3f}) at {:.3f} s", to_string(event.code),
-                   event.source, event.item_id, event.value,
-                   static_cast<double>(event.time_ns) / 1e9);
-  }
-}
-
-Kpis run_realtime(const RunArgs& args, const LineConfig& line, Plant& plant, double duration_s,
-                  Progress& progress, LedgerWriter& ledger) {
-  LineController controller(line);
-  LineControllerLogic logic(controller);
-  PlantIo io(plant, args.seed);
-  // Before the runtime: the HMI outlives the scans that publish to it.
-  const std::unique_ptr<HmiRun> hmi = start_hmi(args.hmi_config, line, logic, io);
-  io.request_line_start();
-  RuntimeOptions options;
-  options.fifo_priority = args.fifo_priority;
-  options.lock_memory = args.lock_memory;
-  options.on_fault = [](RuntimeFault fault) {
-    spdlog::error("runtime fault: {}", to_string(fault));
-  };
-  ScanRuntime runtime(io, logic, options);
-  KpiCollector collector(line);
-  const auto drain = [&] {
-    while (auto exit = io.exits().pop()) collector.add_exit(*exit);
-    while (auto record = controller.closed_records().pop()) ledger.write(*record);
-    while (auto event = controller.events().pop()) {
-      collector.add_event(*event);
-      log_event(*event);
-    }
-    ledger.flush();  // a killed service keeps the rows written so far
-  };
-  const auto wall_start = std::chrono::steady_clock::now();
-  const RealtimeSetup setup = runtime.start();
-  if (!setup.error.empty()) spdlog::warn("real-time setup: {}", setup.error);
-  if (!setup.started) throw std::runtime_error("the scan runtime did not start: " + setup.error);
-  bool stop_sent = false;
-  double elapsed_s = 0.0;
-  double fed_s = duration_s;  // feeding time, up to the stop request
-  bool stop_requested = false;
-  while (runtime.running()) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    drain();
-    elapsed_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-    progress(std::min(elapsed_s, duration_s), duration_s);
-    const int signals = g_stop_signals.load();
-    if (!stop_sent && (elapsed_s >= duration_s || signals > 0)) {
-      if (signals > 0) spdlog::info("stop requested by signal: stopping the line, draining belts");
-      io.request_line_stop();
-      stop_sent = true;
-      fed_s = std::min(elapsed_s, duration_s);
-    }
-    // Drained after the stop, a second signal, or a drain that takes too long: end the run.
-    const bool drained =
-        stop_sent && controller.state() == LineState::kStopped && io.fillets_on_line() == 0;
-    const bool give_up = stop_sent && (signals > 1 || elapsed_s > fed_s + kDrainTimeoutS);
-    if (!stop_requested && (drained || give_up)) {
-      if (!drained) spdlog::warn("ending the run before the belts were drained");
-      runtime.request_stop();
-      stop_requested = true;
-    }
-  }
-  runtime.wait();
-  drain();
-  controller.close_all_in_transit(io.last_scan_time_ns(), LostReason::kRunEnded);
-  drain();
-  Kpis kpis;
-  kpis.plant = plant.name();
-  kpis.seed = args.seed;
-  kpis.compute = runtime.stats().summary().compute;
-  collector.finish(controller, io.fillets_fed(), io.fillets_on_line(), fed_s, elapsed_s, elapsed_s,
-                   kpis);
-  const CycleStatsSummary stats = runtime.stats().summary();
-  spdlog::info("real-time scans {}, overruns {}, wake-up latency p99.9 {:.1f} us max {:.1f} us",
-               stats.scans, stats.overruns, static_cast<double>(stats.wakeup_latency.p999_ns) / 1e3,
-               static_cast<double>(stats.wakeup_latency.max_ns) / 1e3);
-  return kpis;
-}
 
 int run_command(const RunArgs& args) {
   // "forever" is the service's duration: the real-time loop runs until a stop signal.
@@ -226,7 +90,13 @@ int run_command(const RunArgs& args) {
   LedgerWriter ledger(args.ledger_path);
   Kpis kpis;
   if (args.realtime) {
-    kpis = run_realtime(args, line, *plant, *duration_s, progress, ledger);
+    RealtimeRunOptions options;
+    options.duration_s = *duration_s;
+    options.seed = args.seed;
+    options.fifo_priority = args.fifo_priority;
+    options.lock_memory = args.lock_memory;
+    options.hmi_config = args.hmi_config;
+    kpis = run_realtime(options, line, *plant, progress, ledger).kpis;
   } else {
     RunOptions options;
     options.duration_s = *duration_s;
@@ -343,6 +213,8 @@ int main(int argc, char** argv) {
   CLI::App* diagnose = add_diagnose_subcommand(app, diagnose_args);
   GenerateArgs generate_args;
   CLI::App* dataset = add_dataset_subcommand(app, generate_args);
+  SoakArgs soak_args;
+  CLI::App* soak = add_soak_subcommand(app, soak_args);
   HmiToolArgs hmi_args;
   CLI::App* hmi = add_hmi_subcommand(app, hmi_args);
 
@@ -353,8 +225,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "linectl: %s\n", error.what());
     return 1;
   }
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  install_stop_signal_handlers();
   try {
     if (run->parsed()) return run_command(run_args);
     if (record->parsed()) return record_command(record_args);
@@ -365,6 +236,7 @@ int main(int argc, char** argv) {
     if (diagnose->parsed()) return diagnose_command(diagnose_args);
     if (dataset->parsed()) return generate_command(generate_args);
     if (hmi->parsed()) return hmi_command(hmi_args);
+    if (soak->parsed()) return soak_command(soak_args);
     if (check->parsed()) {
       const std::filesystem::path line_file =
           check_path.empty() ? default_config("line.yaml") : std::filesystem::path(check_path);

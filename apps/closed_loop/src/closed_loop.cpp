@@ -133,6 +133,7 @@ Kpis run_closed_loop(const LineConfig& config, Plant& plant, const RunOptions& o
     } else {
       controller.update(in, out);
     }
+    if (options.after_update) options.after_update(in, out);
     plant.step(out, options.period_ns, in);
     drain();
     if (options.progress && scan % scans_per_second == 0) {
@@ -206,14 +207,18 @@ nlohmann::json to_json(const Kpis& kpis) {
         {"detections_unmatched", c.detections_unmatched},
         {"detections_duplicate", c.detections_duplicate},
         {"faults_seen", faults}}},
-      {"cycle_compute_us",
-       {{"count", kpis.compute.count},
-        {"mean", kpis.compute.mean_ns / 1e3},
-        {"p50", static_cast<double>(kpis.compute.p50_ns) / 1e3},
-        {"p99", static_cast<double>(kpis.compute.p99_ns) / 1e3},
-        {"p999", static_cast<double>(kpis.compute.p999_ns) / 1e3},
-        {"max", static_cast<double>(kpis.compute.max_ns) / 1e3}}},
+      {"cycle_compute_us", to_json_us(kpis.compute)},
   };
+}
+
+nlohmann::json to_json_us(const DistributionSummary& summary) {
+  constexpr double kNsPerUs = 1e3;
+  return {{"count", summary.count},
+          {"mean", summary.mean_ns / kNsPerUs},
+          {"p50", static_cast<double>(summary.p50_ns) / kNsPerUs},
+          {"p99", static_cast<double>(summary.p99_ns) / kNsPerUs},
+          {"p999", static_cast<double>(summary.p999_ns) / kNsPerUs},
+          {"max", static_cast<double>(summary.max_ns) / kNsPerUs}};
 }
 
 std::string format_kpis(const Kpis& kpis) {

@@ -31,6 +31,9 @@ struct RunOptions {
   // Called before each scan with the scan's time, for scenarios that inject faults or
   // operator actions; may be empty.
   std::function<void(std::int64_t time_ns, LineController& controller)> before_scan;
+  // Called after each scan's update() with the input image it read and the output image it
+  // wrote, for scenarios that check in which scan a reaction happened; may be empty.
+  std::function<void(const InputImage& in, const OutputImage& out)> after_update;
 };
 
 // Ground truth tally from the plant: what physically happened to every fillet.
@@ -97,6 +100,8 @@ class KpiCollector {
 };
 
 nlohmann::json to_json(const Kpis& kpis);
+// A duration distribution in microseconds: count, mean, p50, p99, p99.9, max.
+nlohmann::json to_json_us(const DistributionSummary& summary);
 // A few lines for a terminal.
 std::string format_kpis(const Kpis& kpis);
 
