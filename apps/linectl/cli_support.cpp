@@ -1,9 +1,12 @@
 #include "cli_support.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <cstdlib>
 #include <numbers>
 #include <stdexcept>
 
+#include "duration.hpp"
 #include "fl/twin/dem_plant/dem_plant.hpp"
 #include "fl/twin/fast_plant.hpp"
 #include "fl/twin/fast_plant_config.hpp"
@@ -37,30 +40,45 @@ std::filesystem::path default_config(const char* file) {
                            ". Set FL_CONFIG_DIR or name the file on the command line.");
 }
 
+std::filesystem::path config_or_default(const std::string& given, const char* default_file) {
+  return given.empty() ? default_config(default_file) : std::filesystem::path(given);
+}
+
+std::optional<RunTimes> parse_run_times(const std::string& duration, const std::string& wait,
+                                        const std::string& drain) {
+  const auto duration_s = parse_duration_s(duration);
+  const auto wait_s = parse_duration_s(wait);
+  const auto drain_s = parse_duration_s(drain);
+  if (!duration_s || !wait_s || !drain_s) {
+    spdlog::error(
+        "--duration {}, --wait {}, --drain {}: each must be a positive duration "
+        "(examples: 90s, 10m)",
+        duration, wait, drain);
+    return std::nullopt;
+  }
+  return RunTimes{*duration_s, *wait_s, *drain_s};
+}
+
 std::unique_ptr<Plant> make_plant(const std::string& name, const std::string& plant_config,
                                   const LineConfig& line) {
   if (name == "fast") {
-    const std::filesystem::path file = plant_config.empty() ? default_config("plant_fast.yaml")
-                                                            : std::filesystem::path(plant_config);
-    return std::make_unique<FastPlant>(line, load_fast_plant_config(file));
+    return std::make_unique<FastPlant>(
+        line, load_fast_plant_config(config_or_default(plant_config, "plant_fast.yaml")));
   }
   if (name == "dem") {
-    const std::filesystem::path file = plant_config.empty() ? default_config("plant_dem.yaml")
-                                                            : std::filesystem::path(plant_config);
-    return std::make_unique<DemPlant>(line, load_dem_plant_config(file));
+    return std::make_unique<DemPlant>(
+        line, load_dem_plant_config(config_or_default(plant_config, "plant_dem.yaml")));
   }
   throw std::runtime_error("--plant " + name + ": unknown plant (choose fast or dem)");
 }
 
 void check_plant_config(const std::string& name, const std::string& plant_config) {
   if (name == "fast") {
-    load_fast_plant_config(plant_config.empty() ? default_config("plant_fast.yaml")
-                                                : std::filesystem::path(plant_config));
+    load_fast_plant_config(config_or_default(plant_config, "plant_fast.yaml"));
     return;
   }
   if (name == "dem") {
-    load_dem_plant_config(plant_config.empty() ? default_config("plant_dem.yaml")
-                                               : std::filesystem::path(plant_config));
+    load_dem_plant_config(config_or_default(plant_config, "plant_dem.yaml"));
     return;
   }
   throw std::runtime_error("--plant " + name + ": unknown plant (choose fast or dem)");

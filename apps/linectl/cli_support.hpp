@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,20 @@ std::vector<std::filesystem::path> config_search_dirs();
 // The first of config_search_dirs() that holds file. Throws std::runtime_error naming the
 // file and every folder searched when none does.
 std::filesystem::path default_config(const char* file);
+
+// The file named on the command line, or default_config(default_file) when none is.
+std::filesystem::path config_or_default(const std::string& given, const char* default_file);
+
+// --duration, --wait and --drain of a command that waits for a peer, runs and drains.
+struct RunTimes {
+  double duration_s = 0.0;
+  double wait_s = 0.0;
+  double drain_s = 0.0;
+};
+
+// Logs which options must be positive durations and returns nullopt when one is not.
+std::optional<RunTimes> parse_run_times(const std::string& duration, const std::string& wait,
+                                        const std::string& drain);
 
 // "fast" or "dem"; an empty plant_config takes the plant's default file. Throws
 // std::runtime_error for an unknown name and ConfigError for a bad file.

@@ -12,7 +12,6 @@
 #include <thread>
 
 #include "cli_support.hpp"
-#include "duration.hpp"
 #include "fl/apps/closed_loop.hpp"
 #include "fl/controller/config_loader.hpp"
 #include "fl/controller/line_controller.hpp"
@@ -84,19 +83,9 @@ CLI::App* add_control_subcommand(CLI::App& app, ControlArgs& args) {
 }
 
 int control_command(const ControlArgs& args) {
-  const auto duration_s = parse_duration_s(args.duration);
-  const auto wait_s = parse_duration_s(args.wait);
-  const auto drain_s = parse_duration_s(args.drain);
-  if (!duration_s || !wait_s || !drain_s) {
-    spdlog::error(
-        "--duration {}, --wait {}, --drain {}: each must be a positive duration "
-        "(examples: 90s, 10m)",
-        args.duration, args.wait, args.drain);
-    return 2;
-  }
-  const std::filesystem::path config_file =
-      args.config.empty() ? default_config("line.yaml") : std::filesystem::path(args.config);
-  const LineConfig line = load_line_config(config_file);
+  const std::optional<RunTimes> times = parse_run_times(args.duration, args.wait, args.drain);
+  if (!times) return 2;
+  const LineConfig line = load_line_config(config_or_default(args.config, "line.yaml"));
   LedgerWriter ledger(args.ledger_path);
 
   const dds_domainid_t domain =
@@ -122,16 +111,16 @@ int control_command(const ControlArgs& args) {
 
   // The line's I/O first: a controller that starts scanning before the sensors arrive sees an
   // open safety chain and latches kEstop (DdsProcessIo), which only an acknowledge clears.
-  spdlog::info("control: waiting up to {} s for the line's sensors", *wait_s);
+  spdlog::info("control: waiting up to {} s for the line's sensors", times->wait_s);
   const auto wait_start = std::chrono::steady_clock::now();
   while (!sensors.delivered()) {
     const double waited_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wait_start).count();
-    if (waited_s > *wait_s || g_control_interrupts.load() > 0) {
+    if (waited_s > times->wait_s || g_control_interrupts.load() > 0) {
       spdlog::error(
           "control: no LineSensors on '{}' within {} s (is the twin or the line's I/O "
           "running on the same domain and CYCLONEDDS_URI?)",
-          dds::kSensorsTopic, *wait_s);
+          dds::kSensorsTopic, times->wait_s);
       return 4;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -156,7 +145,7 @@ int control_command(const ControlArgs& args) {
   const RealtimeSetup setup = runtime.start();
   if (!setup.error.empty()) spdlog::warn("real-time setup: {}", setup.error);
   if (!setup.started) throw std::runtime_error("the scan runtime did not start: " + setup.error);
-  spdlog::info("control: scanning; {} s of feeding, then a controlled stop", *duration_s);
+  spdlog::info("control: scanning; {} s of feeding, then a controlled stop", times->duration_s);
 
   bool stop_sent = false;
   bool line_faulted = false;
@@ -166,7 +155,7 @@ int control_command(const ControlArgs& args) {
     drain();
     elapsed_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-    if (!stop_sent && (elapsed_s >= *duration_s || g_control_interrupts.load() > 0)) {
+    if (!stop_sent && (elapsed_s >= times->duration_s || g_control_interrupts.load() > 0)) {
       logic.request_stop();
       stop_sent = true;
     }
@@ -179,7 +168,8 @@ int control_command(const ControlArgs& args) {
       runtime.request_stop();
     }
     const bool stopped = stop_sent && state == LineState::kStopped;
-    if (stopped || elapsed_s > *duration_s + *drain_s || g_control_interrupts.load() > 1) {
+    if (stopped || elapsed_s > times->duration_s + times->drain_s ||
+        g_control_interrupts.load() > 1) {
       runtime.request_stop();
     }
   }
@@ -190,7 +180,7 @@ int control_command(const ControlArgs& args) {
 
   Kpis kpis;
   kpis.plant = "dds";
-  collector.finish(controller, 0, 0, *duration_s, elapsed_s, elapsed_s, kpis);
+  collector.finish(controller, 0, 0, times->duration_s, elapsed_s, elapsed_s, kpis);
   const CycleStatsSummary stats = runtime.stats().summary();
   kpis.compute = stats.compute;
   const dds::LineOutputCounters out = output.counters();
@@ -223,7 +213,7 @@ int control_command(const ControlArgs& args) {
   std::printf(
       "control, %.1f s fed, %.1f s wall, %llu scans, %llu overruns, wake-up latency "
       "p99.9 %.1f us max %.1f us\n",
-      *duration_s, elapsed_s, static_cast<unsigned long long>(stats.scans),
+      times->duration_s, elapsed_s, static_cast<unsigned long long>(stats.scans),
       static_cast<unsigned long long>(stats.overruns),
       static_cast<double>(stats.wakeup_latency.p999_ns) / 1e3,
       static_cast<double>(stats.wakeup_latency.max_ns) / 1e3);

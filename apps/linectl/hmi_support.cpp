@@ -20,11 +20,11 @@ std::string raise_twin_fault(PlantIo& io, std::string_view fault, std::string_vi
                              bool active) {
   try {
     if (fault == "camera_silent") {
-      const auto camera = hmi::camera_from_name(target);
+      const auto camera = parse<CameraId>(target);
       if (!camera) return "unknown camera '" + std::string(target) + "'";
       io.set_twin_fault(TwinFault::kCameraSilent, index(*camera), active);
     } else if (fault == "drive_lost") {
-      const auto drive = hmi::drive_from_name(target);
+      const auto drive = parse<DriveId>(target);
       if (!drive) return "unknown drive '" + std::string(target) + "'";
       io.set_twin_fault(TwinFault::kDriveLost, index(*drive), active);
     } else if (fault == "estop") {

@@ -18,7 +18,6 @@
 #include <thread>
 
 #include "cli_support.hpp"
-#include "duration.hpp"
 #include "fl/apps/closed_loop.hpp"
 #include "fl/controller/config_loader.hpp"
 #include "fl/controller/line_controller.hpp"
@@ -110,19 +109,9 @@ CLI::App* add_twin_subcommand(CLI::App& app, TwinServeArgs& args) {
 }
 
 int twin_serve_command(const TwinServeArgs& args) {
-  const auto duration_s = parse_duration_s(args.duration);
-  const auto wait_s = parse_duration_s(args.wait);
-  const auto drain_s = parse_duration_s(args.drain);
-  if (!duration_s || !wait_s || !drain_s) {
-    spdlog::error(
-        "--duration {}, --wait {}, --drain {}: each must be a positive duration "
-        "(examples: 90s, 10m)",
-        args.duration, args.wait, args.drain);
-    return 2;
-  }
-  const std::filesystem::path config_file =
-      args.config.empty() ? default_config("line.yaml") : std::filesystem::path(args.config);
-  const LineConfig line = load_line_config(config_file);
+  const std::optional<RunTimes> times = parse_run_times(args.duration, args.wait, args.drain);
+  if (!times) return 2;
+  const LineConfig line = load_line_config(config_or_default(args.config, "line.yaml"));
   std::unique_ptr<Plant> plant = make_plant(args.plant, args.plant_config, line);
 
   const dds_domainid_t domain =
@@ -140,16 +129,16 @@ int twin_serve_command(const TwinServeArgs& args) {
   // The plant's clock starts when a controller is there: a matched command writer. Until
   // then nothing is published, so the controller's first input image is the plant at time 0.
   spdlog::info("twin: {} plant, seed {}, {} s of feeding; waiting up to {} s for a controller",
-               plant->name(), args.seed, *duration_s, *wait_s);
+               plant->name(), args.seed, times->duration_s, times->wait_s);
   const auto wait_start = std::chrono::steady_clock::now();
   while (commands.matched_writers() == 0) {
     const double waited_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wait_start).count();
-    if (waited_s > *wait_s || g_twin_interrupted.load()) {
+    if (waited_s > times->wait_s || g_twin_interrupted.load()) {
       spdlog::error(
           "twin: no controller matched the command topic within {} s (is linectl "
           "control running on the same domain and CYCLONEDDS_URI?)",
-          *wait_s);
+          times->wait_s);
       return 4;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -178,7 +167,7 @@ int twin_serve_command(const TwinServeArgs& args) {
   const std::int64_t start_ns = monotonic_ns() + kPeriodNs;
   // Frame times are on the plant's clock; the controller's is CLOCK_MONOTONIC of this host.
   const std::int64_t offset_ns = start_ns - plant_in.time_ns;
-  const auto limit_ns = static_cast<std::int64_t>((*duration_s + *drain_s) * 1e9);
+  const auto limit_ns = static_cast<std::int64_t>((times->duration_s + times->drain_s) * 1e9);
   const OutputImage safe = make_safe_output_image();
   dds::ReceivedCommand command;
   bool have_command = false;
@@ -262,7 +251,7 @@ int twin_serve_command(const TwinServeArgs& args) {
   kpis.plant = plant->name();
   kpis.seed = args.seed;
   const double simulated_s = static_cast<double>(plant_in.time_ns) / 1e9;
-  collector.finish(no_controller, plant->fillets_fed(), plant->fillets_on_line(), *duration_s,
+  collector.finish(no_controller, plant->fillets_fed(), plant->fillets_on_line(), times->duration_s,
                    simulated_s, wall_s, kpis);
   nlohmann::json json = to_json(kpis);
   for (const char* key : {"ledger", "controller", "cycle_compute_us", "items_per_minute"}) {
@@ -284,7 +273,7 @@ int twin_serve_command(const TwinServeArgs& args) {
 
   const TruthTally& t = kpis.truth;
   std::printf("twin %s, seed %llu, %.1f s fed, %.1f s line time in %.1f s wall\n",
-              kpis.plant.c_str(), static_cast<unsigned long long>(args.seed), *duration_s,
+              kpis.plant.c_str(), static_cast<unsigned long long>(args.seed), times->duration_s,
               simulated_s, wall_s);
   std::printf("throughput      %.1f placed/min\n", kpis.placed_per_minute);
   std::printf("in spec         %.2f %% of singulated fillets (%llu of %llu)\n",

@@ -7,44 +7,6 @@
 namespace fl::hmi {
 namespace {
 
-constexpr std::array<const char*, kDriveCount> kDriveNames = {"bulk",
-                                                              "takt",
-                                                              "transition1",
-                                                              "transition2",
-                                                              "guide",
-                                                              "reject",
-                                                              "centring",
-                                                              "multilane1_left",
-                                                              "multilane1_right",
-                                                              "multilane2_left",
-                                                              "multilane2_right",
-                                                              "squeeze",
-                                                              "outfeed"};
-constexpr std::array<const char*, kCameraCount> kCameraNames = {
-    "orientation", "position", "multilane1", "multilane2", "final"};
-
-const char* hand_name(Hand hand) {
-  switch (hand) {
-    case Hand::kLeft:
-      return "left";
-    case Hand::kRight:
-      return "right";
-    default:
-      return "unknown";
-  }
-}
-
-const char* side_name(SideUp side) {
-  switch (side) {
-    case SideUp::kSkin:
-      return "skin";
-    case SideUp::kBone:
-      return "bone";
-    default:
-      return "unknown";
-  }
-}
-
 // One word for the page's colour key: what the controller will do with the fillet next.
 const char* item_state(const TrackedItemView& item) {
   if (item.reject_pending) return "reject";
@@ -62,39 +24,6 @@ nlohmann::json number(float value) {
 }
 
 }  // namespace
-
-const char* drive_name(DriveId drive) { return kDriveNames[index(drive)]; }
-const char* camera_name(CameraId camera) { return kCameraNames[index(camera)]; }
-
-std::optional<DriveId> drive_from_name(std::string_view name) {
-  for (std::size_t d = 0; d < kDriveCount; ++d) {
-    if (name == kDriveNames[d]) return static_cast<DriveId>(d);
-  }
-  return std::nullopt;
-}
-
-std::optional<CameraId> camera_from_name(std::string_view name) {
-  for (std::size_t c = 0; c < kCameraCount; ++c) {
-    if (name == kCameraNames[c]) return static_cast<CameraId>(c);
-  }
-  return std::nullopt;
-}
-
-const char* state_name(LineState state) {
-  switch (state) {
-    case LineState::kStopped:
-      return "stopped";
-    case LineState::kStarting:
-      return "starting";
-    case LineState::kRunning:
-      return "running";
-    case LineState::kStopping:
-      return "stopping";
-    case LineState::kFault:
-      return "fault";
-  }
-  return "unknown";
-}
 
 void ThroughputMeter::add(std::int64_t time_ns, std::uint64_t placed) {
   constexpr std::int64_t kWindowNs = 60'000'000'000;
@@ -117,11 +46,12 @@ nlohmann::json status_to_json(const LineStatus& status, std::optional<double> pl
   json drives = json::object();
   for (std::size_t d = 0; d < kDriveCount; ++d) {
     const DriveStatus& drive = status.drives[d];
-    drives[kDriveNames[d]] = {{"command_mps", number(drive.command_mps)},
-                              {"speed_mps", number(drive.speed_mps)},
-                              {"enabled", drive.enabled},
-                              {"ready", drive.ready},
-                              {"fault", drive.fault}};
+    drives[std::string(to_string(static_cast<DriveId>(d)))] = {
+        {"command_mps", number(drive.command_mps)},
+        {"speed_mps", number(drive.speed_mps)},
+        {"enabled", drive.enabled},
+        {"ready", drive.ready},
+        {"fault", drive.fault}};
   }
   json fillets = json::array();
   for (std::uint32_t i = 0; i < status.tracked_count && i < status.tracked.size(); ++i) {
@@ -132,8 +62,8 @@ nlohmann::json status_to_json(const LineStatus& status, std::optional<double> pl
                    {"angle_rad", item.angle_known ? number(item.angle_rad) : json()},
                    {"state", item_state(item)},
                    {"lane", item.multilane_unit >= 0 ? json(item.multilane_unit + 1) : json()},
-                   {"hand", hand_name(item.hand)},
-                   {"side", side_name(item.side)},
+                   {"hand", to_string(item.hand)},
+                   {"side", to_string(item.side)},
                    {"flip_plate1", item.flip_plate1},
                    {"flip_plate2", item.flip_plate2}};
     if (item.reject_pending) fillet["reject_reason"] = to_string(item.reject_reason);
@@ -157,7 +87,7 @@ nlohmann::json status_to_json(const LineStatus& status, std::optional<double> pl
       {"type", "status"},
       {"sequence", status.sequence},
       {"time_s", static_cast<double>(status.time_ns) / 1e9},
-      {"state", state_name(status.state)},
+      {"state", to_string(status.state)},
       {"estop_ok", status.estop_ok},
       {"faults", faults},
       {"drives", drives},
@@ -205,14 +135,14 @@ nlohmann::json layout_to_json(const LineConfig& line) {
   for (std::size_t d = 0; d < kDriveCount; ++d) {
     const BeltSection& section = line.sections[d];
     if (section.end_mm <= section.start_mm) continue;  // bulk, multilane right belts
-    sections.push_back({{"drive", kDriveNames[d]},
+    sections.push_back({{"drive", to_string(static_cast<DriveId>(d))},
                         {"start_mm", section.start_mm},
                         {"end_mm", section.end_mm},
                         {"nominal_speed_mps", section.nominal_speed_mps}});
   }
   json cameras = json::array();
   for (std::size_t c = 0; c < kCameraCount; ++c) {
-    cameras.push_back({{"name", kCameraNames[c]},
+    cameras.push_back({{"name", to_string(static_cast<CameraId>(c))},
                        {"s_mm", line.cameras[c].s_mm},
                        {"field_of_view_mm", line.cameras[c].field_of_view_mm}});
   }

@@ -10,7 +10,15 @@
 namespace fl::report {
 namespace {
 
-std::string quote_if_needed(std::string_view field) {
+std::string cell_text(const CsvCell& cell) {
+  if (const auto* number = std::get_if<double>(&cell)) return format_double(*number);
+  if (const auto* text = std::get_if<std::string>(&cell)) return csv_quote(*text);
+  return {};
+}
+
+}  // namespace
+
+std::string csv_quote(std::string_view field) {
   if (field.find_first_of(",\"\r\n") == std::string_view::npos) {
     return std::string(field);
   }
@@ -22,14 +30,6 @@ std::string quote_if_needed(std::string_view field) {
   quoted += '"';
   return quoted;
 }
-
-std::string cell_text(const CsvCell& cell) {
-  if (const auto* number = std::get_if<double>(&cell)) return format_double(*number);
-  if (const auto* text = std::get_if<std::string>(&cell)) return quote_if_needed(*text);
-  return {};
-}
-
-}  // namespace
 
 std::string format_double(double value) {
   std::array<char, 32> buffer{};
@@ -90,7 +90,7 @@ std::string CsvTable::to_string() const {
   std::string text;
   for (std::size_t c = 0; c < columns_.size(); ++c) {
     if (c > 0) text += ',';
-    text += quote_if_needed(columns_[c]);
+    text += csv_quote(columns_[c]);
   }
   text += "\r\n";
   for (const auto& row : rows_) {

@@ -17,32 +17,6 @@ namespace {
 constexpr std::array<const char*, 8> kPalette = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
                                                  "#E69F00", "#56B4E9", "#000000", "#F0E442"};
 
-std::string escape(std::string_view text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&apos;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 std::string num(double value) {  // pixel coordinates: 0.01 px is plenty
   std::array<char, 32> buffer{};
   std::snprintf(buffer.data(), buffer.size(), "%.2f", value);
@@ -134,7 +108,7 @@ void draw_axes(std::ostringstream& svg, const Frame& f, const Scale& xs, const S
     svg << "<line x1=\"" << num(x) << "\" y1=\"" << num(f.bottom) << "\" x2=\"" << num(x)
         << "\" y2=\"" << num(f.bottom + 5) << "\" stroke=\"#333\"/>";
     svg << "<text x=\"" << num(x) << "\" y=\"" << num(f.bottom + 18) << "\" text-anchor=\"middle\">"
-        << escape(tick_text(v)) << "</text>\n";
+        << xml_escape(tick_text(v)) << "</text>\n";
   }
   for (const double v : axis_ticks(ys.min, ys.max, ys.log)) {
     const double y = ys.px(v);
@@ -143,14 +117,14 @@ void draw_axes(std::ostringstream& svg, const Frame& f, const Scale& xs, const S
     svg << "<line x1=\"" << num(f.left - 5) << "\" y1=\"" << num(y) << "\" x2=\"" << num(f.left)
         << "\" y2=\"" << num(y) << "\" stroke=\"#333\"/>";
     svg << "<text x=\"" << num(f.left - 8) << "\" y=\"" << num(y + 4) << "\" text-anchor=\"end\">"
-        << escape(tick_text(v)) << "</text>\n";
+        << xml_escape(tick_text(v)) << "</text>\n";
   }
   svg << "<text class=\"x-label\" x=\"" << num(0.5 * (f.left + f.right)) << "\" y=\""
-      << num(f.bottom + 40) << "\" text-anchor=\"middle\" font-size=\"14\">" << escape(xa.label)
+      << num(f.bottom + 40) << "\" text-anchor=\"middle\" font-size=\"14\">" << xml_escape(xa.label)
       << "</text>\n";
   const double yc = 0.5 * (f.top + f.bottom);
   svg << "<text class=\"y-label\" x=\"20\" y=\"" << num(yc) << "\" transform=\"rotate(-90 20 "
-      << num(yc) << ")\" text-anchor=\"middle\" font-size=\"14\">" << escape(ya.label)
+      << num(yc) << ")\" text-anchor=\"middle\" font-size=\"14\">" << xml_escape(ya.label)
       << "</text>\n";
   svg << "</g>\n";
 }
@@ -160,12 +134,12 @@ std::string header(int width, int height, const std::string& title) {
   svg << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
       << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
       << "\" viewBox=\"0 0 " << width << ' ' << height << "\">\n"
-      << "<title>" << escape(title) << "</title>\n"
+      << "<title>" << xml_escape(title) << "</title>\n"
       << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
       << "<text class=\"title\" x=\"" << width / 2
       << "\" y=\"28\" text-anchor=\"middle\" font-family=\"sans-serif\" font-size=\"16\" "
          "font-weight=\"bold\">"
-      << escape(title) << "</text>\n";
+      << xml_escape(title) << "</text>\n";
   return svg.str();
 }
 
@@ -196,6 +170,32 @@ std::string colormap(double t) {
 }
 
 }  // namespace
+
+std::string xml_escape(std::string_view text) {
+  std::string out;
+  for (const char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&apos;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
 
 std::vector<double> axis_ticks(double min, double max, bool log) {
   std::vector<double> ticks;
@@ -295,7 +295,7 @@ std::string render_svg(const Plot& plot) {
           << color << "\"/>";
     }
     svg << "<text x=\"" << num(x + 30) << "\" y=\"" << num(y + 4)
-        << "\" font-family=\"sans-serif\" font-size=\"12\">" << escape(label) << "</text>\n";
+        << "\" font-family=\"sans-serif\" font-size=\"12\">" << xml_escape(label) << "</text>\n";
   };
   svg << "<g class=\"legend\">\n";
   for (std::size_t s = 0; s < plot.series.size(); ++s) {
@@ -434,9 +434,10 @@ std::string render_svg(const HeatMap& map) {
       svg << "<rect x=\"" << num(x0) << "\" y=\"" << num(y0) << "\" width=\"" << num(x1 - x0)
           << "\" height=\"" << num(y1 - y0) << "\" fill=\""
           << (value ? colormap(colour_t(*value)) : std::string("url(#no-value)")) << "\">"
-          << "<title>" << escape(tick_text(map.x_centers[c])) << ", "
-          << escape(tick_text(map.y_centers[r])) << ": "
-          << (value ? escape(tick_text(*value)) : std::string("no value")) << "</title></rect>\n";
+          << "<title>" << xml_escape(tick_text(map.x_centers[c])) << ", "
+          << xml_escape(tick_text(map.y_centers[r])) << ": "
+          << (value ? xml_escape(tick_text(*value)) : std::string("no value"))
+          << "</title></rect>\n";
     }
   }
   svg << "</g>\n";
@@ -461,10 +462,10 @@ std::string render_svg(const HeatMap& map) {
   bar.pixel_end = f.top;
   for (const double v : axis_ticks(bar.min, bar.max, bar.log)) {
     svg << "<text x=\"" << num(bx + bw + 4) << "\" y=\"" << num(bar.px(v) + 4) << "\">"
-        << escape(tick_text(v)) << "</text>";
+        << xml_escape(tick_text(v)) << "</text>";
   }
   svg << "\n<text x=\"" << num(bx) << "\" y=\"" << num(f.top - 10) << "\">"
-      << escape(map.value_label) << "</text>\n";
+      << xml_escape(map.value_label) << "</text>\n";
   svg << "<rect x=\"" << num(bx) << "\" y=\"" << num(f.bottom + 20)
       << "\" width=\"14\" height=\"14\" fill=\"url(#no-value)\"/><text x=\"" << num(bx + 18)
       << "\" y=\"" << num(f.bottom + 32) << "\">no value</text>\n";

@@ -27,6 +27,15 @@ TEST(Csv, RoundTripsNumbersAndQuotedText) {
   EXPECT_EQ(rows[3][2], "");
 }
 
+TEST(Csv, QuoteOfOneFieldIsTheTablesQuote) {
+  EXPECT_EQ(csv_quote("plain"), "plain");
+  EXPECT_EQ(csv_quote("lab, week 3"), "\"lab, week 3\"");
+  EXPECT_EQ(csv_quote("say \"hi\""), "\"say \"\"hi\"\"\"");
+  EXPECT_EQ(csv_quote("two\nlines"), "\"two\nlines\"");
+  EXPECT_EQ(parse_csv(csv_quote("a,\"b\"") + ",x\n").at(0),
+            (std::vector<std::string>{"a,\"b\"", "x"}));
+}
+
 TEST(Csv, QuotesOnlyWhereNeededWithCrlfLineEnds) {
   CsvTable table({"a", "b"});
   table.add_row({std::string("x\"y"), 1.0});

@@ -62,6 +62,11 @@ Plot two_series() {
   return plot;
 }
 
+TEST(SvgPlot, XmlEscapeCoversTheFiveEntities) {
+  EXPECT_EQ(xml_escape("a<b> & \"c\" 'd'"), "a&lt;b&gt; &amp; &quot;c&quot; &apos;d&apos;");
+  EXPECT_EQ(xml_escape("plain"), "plain");
+}
+
 TEST(SvgPlot, LineAndScatterPlotIsWellFormedWithOneGroupPerSeries) {
   const std::string svg = render_svg(two_series());
   EXPECT_EQ(xml_problem(svg), "");

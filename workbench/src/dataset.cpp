@@ -6,12 +6,12 @@
 #include <cmath>
 #include <numbers>
 #include <set>
-#include <sstream>
 #include <unordered_map>
 #include <utility>
 
 #include "csv_reader.hpp"
 #include "fl/controller/yaml_reader.hpp"
+#include "text.hpp"
 
 namespace fl::workbench {
 namespace {
@@ -110,22 +110,9 @@ constexpr std::array kExperimentNames{
     std::pair{ExperimentType::kBulkFlow, std::string_view("bulk_flow")},
 };
 
-std::string_view trim(std::string_view text) {
-  while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
-  while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
-  return text;
-}
-
-std::string number_text(double value) {
-  std::ostringstream out;
-  out.precision(6);
-  out << value;
-  return out.str();
-}
-
 // A value in the given unit, for messages in the user's units.
 std::string in_unit(double value_si, const Unit& unit) {
-  return number_text(value_si / unit.to_si) + " " + std::string(unit.symbol);
+  return detail::significant(value_si / unit.to_si, 6) + " " + std::string(unit.symbol);
 }
 
 std::string join(const std::vector<std::string_view>& names) {
@@ -173,7 +160,7 @@ struct HeaderColumn {
 // "force [N]" -> force, N. Reports and returns false when malformed.
 bool parse_header_field(std::string_view field, int line, int column, FileProblems& problems,
                         std::string& name, Unit& unit, Quantity expected, bool quantity_known) {
-  const std::string_view text = trim(field);
+  const std::string_view text = detail::trim(field);
   const auto open = text.find('[');
   if (open == std::string_view::npos || text.back() != ']') {
     problems.add(line, column,
@@ -183,8 +170,8 @@ bool parse_header_field(std::string_view field, int line, int column, FileProble
                                      : std::string()));
     return false;
   }
-  name = std::string(trim(text.substr(0, open)));
-  const std::string_view symbol = trim(text.substr(open + 1, text.size() - open - 2));
+  name = std::string(detail::trim(text.substr(0, open)));
+  const std::string_view symbol = detail::trim(text.substr(open + 1, text.size() - open - 2));
   if (name.empty()) {
     problems.add(line, column, "a column has a unit but no name");
     return false;
@@ -225,8 +212,8 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
   bool header_ok = true;
   for (std::size_t c = 0; c < header.fields.size(); ++c) {
     const int column = static_cast<int>(c) + 1;
-    const std::string_view raw = trim(header.fields[c]);
-    const std::string_view bare = trim(raw.substr(0, raw.find('[')));
+    const std::string_view raw = detail::trim(header.fields[c]);
+    const std::string_view bare = detail::trim(raw.substr(0, raw.find('[')));
     const ColumnRule* rule = nullptr;
     if (commands) {
       if (bare == "time") rule = &kCommandTime;
@@ -303,7 +290,7 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
     for (std::size_t c = 0; c < columns.size(); ++c) {
       const int column = static_cast<int>(c) + 1;
       const HeaderColumn& h = columns[c];
-      const std::string_view cell = trim(row.fields[c]);
+      const std::string_view cell = detail::trim(row.fields[c]);
       if (cell.empty()) {
         problems.add(row.line, column, h.name + ": empty cell (a missing value is not allowed)");
         row_ok = false;

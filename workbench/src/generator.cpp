@@ -1,10 +1,10 @@
 #include "fl/workbench/generator.hpp"
 
-#include <charconv>
 #include <fstream>
 #include <random>
 #include <stdexcept>
 
+#include "fl/report/csv.hpp"
 #include "fl/twin/dem/config.hpp"
 #include "fl/workbench/twin_models.hpp"
 
@@ -33,12 +33,6 @@ const std::vector<EffectRange>& compress_effects() {
       {"bpm_plastic", {{"normal_yield_strength_pa", 50.0, 100.0, false}}},
   };
   return effects;
-}
-
-std::string number(double value) {
-  char text[32];
-  const auto [end, error] = std::to_chars(text, text + sizeof text, value);
-  return error == std::errc{} ? std::string(text, end) : std::string("0");
 }
 
 // Load to the peak travel over `ramp_s`, hold, unload over `ramp_s`; rows every 5 ms.
@@ -159,8 +153,8 @@ void write_dataset(const Dataset& dataset, const std::filesystem::path& folder) 
       // Written in the channel's file unit, as a lab would.
       const Unit unit = dataset.trials.empty() ? *find_unit(si_unit(Quantity::kDimensionless))
                                                : dataset.trials[0].data.at(channel).unit;
-      manifest << "  " << channel << ": " << number(sigma / unit.to_si) << " " << unit.symbol
-               << "\n";
+      manifest << "  " << channel << ": " << report::format_double(sigma / unit.to_si) << " "
+               << unit.symbol << "\n";
     }
   }
   manifest << "trials:\n";
@@ -178,24 +172,21 @@ void write_dataset(const Dataset& dataset, const std::filesystem::path& folder) 
         for (const ConditionRule& rule : schema_of(dataset.experiment).conditions) {
           if (rule.name == name) quantity = rule.quantity;
         }
-        manifest << number(*si) << " " << si_unit(quantity);
+        manifest << report::format_double(*si) << " " << si_unit(quantity);
       }
       manifest << "\n";
     }
-    std::ofstream csv(folder / file);
-    for (std::size_t c = 0; c < trial.data.channels.size(); ++c) {
-      const Channel& channel = trial.data.channels[c];
-      csv << (c == 0 ? "" : ",") << channel.name << " [" << channel.unit.symbol << "]";
+    // Values in each channel's file unit, as a lab would write them.
+    std::vector<std::string> header;
+    std::vector<std::vector<double>> columns;
+    for (const Channel& channel : trial.data.channels) {
+      header.push_back(channel.name + " [" + std::string(channel.unit.symbol) + "]");
+      std::vector<double>& column = columns.emplace_back();
+      for (const double value : channel.values_si) column.push_back(value / channel.unit.to_si);
     }
-    csv << "\n";
-    for (std::size_t row = 0; row < trial.data.rows(); ++row) {
-      for (std::size_t c = 0; c < trial.data.channels.size(); ++c) {
-        const Channel& channel = trial.data.channels[c];
-        csv << (c == 0 ? "" : ",") << number(channel.values_si[row] / channel.unit.to_si);
-      }
-      csv << "\n";
-    }
-    if (!csv) throw std::runtime_error("cannot write " + (folder / file).string());
+    report::CsvTable table(std::move(header));
+    table.add_columns(columns);
+    table.write(folder / file);
   }
   if (!manifest) throw std::runtime_error("cannot write " + (folder / "manifest.yaml").string());
 }
@@ -206,7 +197,7 @@ void write_truth(const HiddenEffect& truth, const std::filesystem::path& file) {
       << "effect: " << (truth.law.empty() ? "none" : truth.law) << "\nparameters:\n";
   if (truth.parameters.empty()) out << "  {}\n";
   for (const auto& [key, value] : truth.parameters)
-    out << "  " << key << ": " << number(value) << "\n";
+    out << "  " << key << ": " << report::format_double(value) << "\n";
   if (!out) throw std::runtime_error("cannot write " + file.string());
 }
 

@@ -7,28 +7,13 @@
 #include <map>
 
 #include "csv_reader.hpp"
+#include "fl/report/csv.hpp"
 #include "fl/report/svg_plot.hpp"
 
 namespace fl::workbench {
 namespace {
 
 constexpr const char* kHeader = "run_utc,dataset,channel,rmse_si,score,model";
-
-// RFC 4180 quoting: the model description holds commas.
-std::string quoted(const std::string& text) {
-  std::string out = "\"";
-  for (const char c : text) {
-    if (c == '"') out += '"';
-    out += c;
-  }
-  return out + "\"";
-}
-
-std::string number(double value) {
-  char text[32];
-  const auto [end, error] = std::to_chars(text, text + sizeof text, value);
-  return error == std::errc{} ? std::string(text, end) : std::string("nan");
-}
 
 bool parse_number(const std::string& text, double& value) {
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
@@ -44,8 +29,10 @@ void append_history(const std::filesystem::path& csv, const CompareReport& repor
   if (fresh) out << kHeader << '\n';
   for (const ErrorCell& cell : report.cells) {
     if (cell.group != "all") continue;
-    out << run_utc << ',' << quoted(report.dataset) << ',' << quoted(cell.channel) << ','
-        << number(cell.rmse_si) << ',' << number(cell.score) << ',' << quoted(report.model) << '\n';
+    // RFC 4180 as report::CsvTable writes it: the model description holds commas.
+    out << report::csv_quote(run_utc) << ',' << report::csv_quote(report.dataset) << ','
+        << report::csv_quote(cell.channel) << ',' << report::format_double(cell.rmse_si) << ','
+        << report::format_double(cell.score) << ',' << report::csv_quote(report.model) << '\n';
   }
   if (!out) throw std::runtime_error("cannot append to " + csv.string());
 }

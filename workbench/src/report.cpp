@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "fl/report/svg_plot.hpp"
+#include "text.hpp"
 
 namespace fl::workbench {
 namespace {
@@ -15,36 +16,6 @@ constexpr double kFailScore = 3.0;
 constexpr double kFailShareNoNoise = 0.10;
 constexpr std::size_t kRankedCellsShown = 15;
 
-std::string escape(std::string_view text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
-std::string fixed(double value, int precision = 3) {
-  std::ostringstream out;
-  out.precision(precision);
-  out << value;
-  return out.str();
-}
-
 const char* verdict(const ErrorCell& cell) {
   const double fail = cell.noise_si > 0.0 ? kFailScore : kFailShareNoNoise;
   const double doubt = cell.noise_si > 0.0 ? 1.0 : kFailShareNoNoise / 3.0;
@@ -53,8 +24,8 @@ const char* verdict(const ErrorCell& cell) {
 }
 
 std::string score_text(const ErrorCell& cell) {
-  return cell.noise_si > 0.0 ? fixed(cell.score, 3) + " &sigma;"
-                             : fixed(100.0 * cell.score, 3) + " %";
+  return cell.noise_si > 0.0 ? detail::significant(cell.score, 3) + " &sigma;"
+                             : detail::significant(100.0 * cell.score, 3) + " %";
 }
 
 }  // namespace
@@ -98,18 +69,19 @@ std::string report_json(const CompareReport& report) {
 std::string report_html(const CompareReport& report) {
   std::ostringstream html;
   html << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>compare: "
-       << escape(report.dataset) << "</title>\n<style>"
+       << report::xml_escape(report.dataset) << "</title>\n<style>"
        << "body{font-family:sans-serif;margin:2em;max-width:1100px}"
        << "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;"
           "text-align:right}th{background:#eee}td.l{text-align:left}"
        << "tr.fail{background:#f8d0d0}tr.doubt{background:#fbeec8}tr.ok{background:#dff0d8}"
        << "</style></head><body>\n";
-  html << "<h1>Model against measurement: " << escape(report.dataset) << "</h1>\n";
+  html << "<h1>Model against measurement: " << report::xml_escape(report.dataset) << "</h1>\n";
   html << "<p>Experiment <b>" << to_string(report.experiment)
-       << "</b>; model: " << escape(report.model) << "</p>\n";
+       << "</b>; model: " << report::xml_escape(report.model) << "</p>\n";
   if (!report.failed_trials.empty()) {
     html << "<p><b>Trials not run:</b></p><ul>";
-    for (const std::string& failure : report.failed_trials) html << "<li>" << escape(failure);
+    for (const std::string& failure : report.failed_trials)
+      html << "<li>" << report::xml_escape(failure);
     html << "</ul>\n";
   }
   html << "<h2>Where it fails</h2>\n<p>Error per channel and group, worst first. Score: RMS "
@@ -128,17 +100,18 @@ std::string report_html(const CompareReport& report) {
     }
     const double to_unit = unit.to_si > 0.0 ? 1.0 / unit.to_si : 1.0;
     const std::string symbol(unit.symbol);
-    html << "<tr class=\"" << verdict(cell) << "\"><td class=l>" << escape(cell.channel)
-         << "</td><td class=l>" << escape(cell.group) << "</td><td>" << cell.samples << "</td><td>"
-         << fixed(cell.rmse_si * to_unit) << " " << symbol << "</td><td>"
-         << fixed(cell.bias_si * to_unit) << " " << symbol << "</td><td>"
-         << fixed(cell.max_abs_si * to_unit) << " " << symbol << "</td><td>"
-         << fixed(cell.max_abs_time_s) << "</td><td>" << score_text(cell) << "</td></tr>\n";
+    html << "<tr class=\"" << verdict(cell) << "\"><td class=l>" << report::xml_escape(cell.channel)
+         << "</td><td class=l>" << report::xml_escape(cell.group) << "</td><td>" << cell.samples
+         << "</td><td>" << detail::significant(cell.rmse_si * to_unit, 3) << " " << symbol
+         << "</td><td>" << detail::significant(cell.bias_si * to_unit, 3) << " " << symbol
+         << "</td><td>" << detail::significant(cell.max_abs_si * to_unit, 3) << " " << symbol
+         << "</td><td>" << detail::significant(cell.max_abs_time_s, 3) << "</td><td>"
+         << score_text(cell) << "</td></tr>\n";
   }
   html << "</table>\n";
 
   for (const TrialTrace& trace : report.traces) {
-    html << "<h2>Trial " << escape(trace.trial) << "</h2>\n";
+    html << "<h2>Trial " << report::xml_escape(trace.trial) << "</h2>\n";
     for (const ChannelTrace& c : trace.channels) {
       const double to_unit = 1.0 / c.unit.to_si;
       std::vector<double> measured, model, residual;
@@ -171,7 +144,7 @@ std::string report_html(const CompareReport& report) {
       try {
         html << report::render_svg(overlay) << "\n" << report::render_svg(residuals) << "\n";
       } catch (const report::ReportError& error) {
-        html << "<p>plot not drawn: " << escape(error.what()) << "</p>\n";
+        html << "<p>plot not drawn: " << report::xml_escape(error.what()) << "</p>\n";
       }
     }
   }

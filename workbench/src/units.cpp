@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "text.hpp"
+
 namespace fl::workbench {
 namespace {
 
@@ -37,12 +39,6 @@ constexpr std::array kUnits{
     Unit{"J", Quantity::kEnergy, 1.0},
     Unit{"mJ", Quantity::kEnergy, 1e-3},
 };
-
-std::string_view trim(std::string_view text) {
-  while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
-  while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
-  return text;
-}
 
 }  // namespace
 
@@ -95,7 +91,7 @@ std::string units_of(Quantity quantity) {
 }
 
 QuantityParse parse_quantity(std::string_view text) {
-  const std::string_view trimmed = trim(text);
+  const std::string_view trimmed = detail::trim(text);
   double number = 0.0;
   const char* begin = trimmed.data();
   const char* end = trimmed.data() + trimmed.size();
@@ -107,7 +103,7 @@ QuantityParse parse_quantity(std::string_view text) {
     return {std::nullopt, "'" + std::string(text) + "' is not a finite number"};
   }
   const std::string_view symbol =
-      trim(std::string_view(rest, static_cast<std::size_t>(end - rest)));
+      detail::trim(std::string_view(rest, static_cast<std::size_t>(end - rest)));
   if (symbol.empty()) return {QuantityValue{number, *find_unit("1")}, {}};
   if (rest == end || (*rest != ' ' && *rest != '\t')) {
     return {std::nullopt, "'" + std::string(text) + "': put a space between number and unit"};

@@ -7,36 +7,14 @@
 
 #include <set>
 
-#include "fl/twin/dem/config.hpp"
-#include "fl/workbench/twin_models.hpp"
+#include "workbench_test_support.hpp"
 
 namespace fl::workbench {
 namespace {
 
-constexpr double kNoiseN = 0.01;  // about 2 % of the ~0.6 N peak force
-
-model_tests::CommonParams base_model() {
-  model_tests::CommonParams common;
-  common.sub_particle_radius_m = 0.007;
-  common.base_spec = dem::appendix_b_model_spec();
-  return common;
-}
-
-GeneratedDataset generate(const std::string& effect, std::uint64_t seed = 3) {
-  GeneratorOptions options;
-  options.seed = seed;
-  options.effect = effect;
-  options.force_noise_n = kNoiseN;
-  options.common = base_model();
-  return generate_dataset(options);
-}
-
-double overall_score(const Dataset& data, const HiddenEffect& model_effect) {
-  model_tests::CommonParams common = base_model();
-  common.base_spec = with_bond_effect(common.base_spec, model_effect);
-  TwinCompressModel model(common);
-  return compare(data, model).overall("force").score;
-}
+using test::base_model;
+using test::generate;
+using test::kNoiseN;
 
 TEST(Generator, DatasetRoundTripsThroughTheMeasurementFormat) {
   const GeneratedDataset made = generate("none");
@@ -72,15 +50,15 @@ TEST(Generator, EveryHiddenEffectFailsTheBaseModelAndNotTheTruth) {
     ASSERT_EQ(made.truth.law, effect);
     // The truth model leaves only the noise: RMS/sigma of ~200 Gaussian samples is 1 within
     // about 0.05 per sigma; 0.15 is three of those.
-    EXPECT_NEAR(overall_score(made.dataset, made.truth), 1.0, 0.15);
-    EXPECT_GT(overall_score(made.dataset, {}), 3.0);
+    EXPECT_NEAR(test::force_score(made.dataset, made.truth), 1.0, 0.15);
+    EXPECT_GT(test::force_score(made.dataset, {}), 3.0);
   }
 }
 
 TEST(Generator, WithoutAHiddenEffectTheBaseModelSitsAtTheNoise) {
   const GeneratedDataset made = generate("none");
   EXPECT_TRUE(made.truth.law.empty());
-  EXPECT_NEAR(overall_score(made.dataset, {}), 1.0, 0.15);
+  EXPECT_NEAR(test::force_score(made.dataset, {}), 1.0, 0.15);
 }
 
 TEST(Generator, RandomChoiceIsSeededAndCoversTheCandidates) {

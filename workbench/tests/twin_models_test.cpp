@@ -4,12 +4,10 @@
 
 #include <gtest/gtest.h>
 
-#include "fl/twin/dem/config.hpp"
+#include "workbench_test_support.hpp"
 
 namespace fl::workbench {
 namespace {
-
-constexpr double kRadiusM = 0.007;  // the fast sub-particle size of the model tests
 
 // Load to 0.5 mm (1.8 % of the 28 mm tall 4-layer block) in 0.1 s, hold 0.1 s, unload in
 // 0.1 s; 61 rows. Short, so the DEM runs take well under a second.
@@ -37,9 +35,7 @@ Trial profile_trial(const std::string& id) {
 
 model_tests::CommonParams common_with_bond_law(const std::string& law,
                                                dem::LawParameters extra = {}) {
-  model_tests::CommonParams common;
-  common.sub_particle_radius_m = kRadiusM;
-  common.base_spec = dem::appendix_b_model_spec();
+  model_tests::CommonParams common = test::base_model();
   for (dem::InteractionSpec& interaction : common.base_spec.interactions) {
     if (!interaction.bond_law) continue;
     interaction.bond_law->name = law;

@@ -10,26 +10,9 @@ namespace fl {
 
 namespace {
 
-constexpr std::array<std::string_view, kDriveCount> kDriveNames{"bulk",
-                                                                "takt",
-                                                                "transition1",
-                                                                "transition2",
-                                                                "guide",
-                                                                "reject",
-                                                                "centring",
-                                                                "multilane1_left",
-                                                                "multilane1_right",
-                                                                "multilane2_left",
-                                                                "multilane2_right",
-                                                                "squeeze",
-                                                                "outfeed"};
-
-constexpr std::array<std::string_view, kCameraCount> kCameraNames{
-    "orientation", "position", "multilane1", "multilane2", "final"};
-
 constexpr std::array<EnumName<SideUp>, 2> kSideNames{{
-    {"skin", SideUp::kSkin},
-    {"bone", SideUp::kBone},
+    {to_string(SideUp::kSkin), SideUp::kSkin},
+    {to_string(SideUp::kBone), SideUp::kBone},
 }};
 
 // The product-path belts from takt barrier to outfeed, in flow order. Bulk is upstream of
@@ -38,10 +21,6 @@ constexpr std::array kSectionDrives{
     DriveId::kTakt,    DriveId::kTransition1, DriveId::kTransition2,    DriveId::kGuide,
     DriveId::kReject,  DriveId::kCentring,    DriveId::kMultilane1Left, DriveId::kMultilane2Left,
     DriveId::kSqueeze, DriveId::kOutfeed};
-
-bool has_section(DriveId id) {
-  return id != DriveId::kBulk && id != DriveId::kMultilane1Right && id != DriveId::kMultilane2Right;
-}
 
 constexpr std::array<DriveId, 4> kMultilaneDrives{
     DriveId::kMultilane1Left, DriveId::kMultilane1Right, DriveId::kMultilane2Left,
@@ -54,13 +33,13 @@ float radians_from_degrees(double degrees) {
 
 // Full key paths, for cross-checks and their messages.
 std::string drive_key(DriveId id, std::string_view field) {
-  return "drives." + std::string(kDriveNames[index(id)]) + "." + std::string(field);
+  return "drives." + std::string(to_string(id)) + "." + std::string(field);
 }
 std::string section_key(DriveId id, std::string_view field) {
-  return "drives." + std::string(kDriveNames[index(id)]) + ".section." + std::string(field);
+  return "drives." + std::string(to_string(id)) + ".section." + std::string(field);
 }
 std::string camera_key(CameraId id, std::string_view field) {
-  return "cameras." + std::string(kCameraNames[index(id)]) + "." + std::string(field);
+  return "cameras." + std::string(to_string(id)) + "." + std::string(field);
 }
 
 // "drives.guide.section.start_mm = 900"
@@ -71,7 +50,7 @@ std::string named(std::string_view key, float value) {
 // ---------------------------------------------------------------- reading
 
 void read_drive(YamlMapReader& drives, DriveId id, LineConfig& config) {
-  YamlMapReader drive = drives.map(kDriveNames[index(id)]);
+  YamlMapReader drive = drives.map(to_string(id));
   DriveLimits& limits = config.limits[index(id)];
   // Zero would stop the belt, forbid any ramp, or make positions unmeasurable.
   limits.max_speed_mps = drive.read_float("max_speed_mps", Range::positive());
@@ -95,7 +74,7 @@ void read_drive(YamlMapReader& drives, DriveId id, LineConfig& config) {
 }
 
 void read_camera(YamlMapReader& cameras, CameraId id, LineConfig& config) {
-  YamlMapReader camera = cameras.map(kCameraNames[index(id)]);
+  YamlMapReader camera = cameras.map(to_string(id));
   CameraMount& mount = config.cameras[index(id)];
   mount.s_mm = camera.read_float("s_mm", Range::any());  // cross-checked against its belt
   mount.field_of_view_mm = camera.read_float("field_of_view_mm", Range::positive());
@@ -267,7 +246,7 @@ void check_on_belt(const LineConfig& config, YamlReader& reader, std::string_vie
   const std::string start = section_key(belt_id, "start_mm");
   const std::string end = section_key(belt_id, "end_mm");
   reader.require(s_mm >= belt.start_mm && s_mm <= belt.end_mm, {key, start, end},
-                 named(key, s_mm) + " must lie on the " + std::string(kDriveNames[index(belt_id)]) +
+                 named(key, s_mm) + " must lie on the " + std::string(to_string(belt_id)) +
                      " belt [" + format_number(belt.start_mm) + ", " + format_number(belt.end_mm) +
                      "] (" + start + ", " + end + "): " + std::string(what));
 }
@@ -297,7 +276,7 @@ void check_cameras(const LineConfig& config, YamlReader& reader) {
     reader.require(first_mm >= belt.start_mm && last_mm <= belt.end_mm, {s, fov, start, end},
                    "field of view [" + format_number(first_mm) + ", " + format_number(last_mm) +
                        "] (" + s + " +- " + fov + " / 2) must lie on the " +
-                       std::string(kDriveNames[index(placement.belt)]) + " belt [" +
+                       std::string(to_string(placement.belt)) + " belt [" +
                        format_number(belt.start_mm) + ", " + format_number(belt.end_mm) + "] (" +
                        start + ", " + end + ")");
     // A staleness limit under one frame period would make every estimate stale between frames.
@@ -484,9 +463,6 @@ LineConfig parse(YamlReader& reader) {
 }
 
 }  // namespace
-
-std::string_view config_name(DriveId id) { return kDriveNames.at(index(id)); }
-std::string_view config_name(CameraId id) { return kCameraNames.at(index(id)); }
 
 LineConfig load_line_config(const std::filesystem::path& file) {
   YamlReader reader = YamlReader::from_file(file);

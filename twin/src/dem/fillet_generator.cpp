@@ -171,4 +171,10 @@ std::vector<FilletTemplate> generate_thesis_fillets(const TriangleMesh& base_mes
   return templates;
 }
 
+std::vector<FilletTemplate> thesis_fillet_templates(double sub_particle_radius_m) {
+  FilletGeneratorOptions options;
+  options.sub_particle_radius_m = sub_particle_radius_m;
+  return generate_thesis_fillets(make_fillet_mesh(), options);
+}
+
 }  // namespace fl::dem

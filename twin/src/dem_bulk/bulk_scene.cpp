@@ -8,8 +8,8 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "bulk_templates.hpp"
 #include "fl/report/csv.hpp"
+#include "fl/twin/dem/fillet_generator.hpp"
 #include "fl/twin/dem/geometry.hpp"
 
 namespace fl {
@@ -33,7 +33,7 @@ void add_fence(dem::MeshWallSpec& mesh, double x0, double y0, double x1, double 
 }  // namespace
 
 BulkScene::BulkScene(const BulkDemConfig& config) : config_(config) {
-  templates_ = dem_bulk_detail::make_templates(config_.simulation.sub_particle_radius_mm * kMm);
+  templates_ = dem::thesis_fillet_templates(config_.simulation.sub_particle_radius_mm * kMm);
   for (const dem::FilletTemplate& t : templates_) {
     std::vector<dem::BodyBond> bonds;
     bonds.reserve(t.bonds.size());
@@ -256,33 +256,7 @@ void BulkScene::control_step(double h_s) {
   feed(h_s);
 }
 
-void BulkScene::scan() {
-  const dem::State& s = sim_->state();
-  for (Fillet& f : fillets_) {
-    f.particles.clear();
-    f.centroid_m.setZero();
-    f.velocity_m_per_s.setZero();
-    f.lower_m.setConstant(1e9);
-    f.upper_m.setConstant(-1e9);
-  }
-  for (std::size_t k = 0; k < s.size(); ++k) {
-    const std::uint32_t body = s.body[k];
-    if (body >= fillet_of_body_.size() || fillet_of_body_[body] < 0) continue;
-    Fillet& f = fillets_[static_cast<std::size_t>(fillet_of_body_[body])];
-    f.particles.push_back(static_cast<std::uint32_t>(k));
-    f.centroid_m += s.position_m[k];
-    f.velocity_m_per_s += s.velocity_m_per_s[k];
-    const Vec3 r = Vec3::Constant(s.radius_m[k]);
-    f.lower_m = f.lower_m.cwiseMin(s.position_m[k] - r);
-    f.upper_m = f.upper_m.cwiseMax(s.position_m[k] + r);
-  }
-  for (Fillet& f : fillets_) {
-    if (f.particles.empty()) continue;
-    const double inv = 1.0 / static_cast<double>(f.particles.size());  // equal spheres
-    f.centroid_m *= inv;
-    f.velocity_m_per_s *= inv;
-  }
-}
+void BulkScene::scan() { dem::gather_sphere_groups(sim_->state(), fillet_of_body_, fillets_); }
 
 void BulkScene::count_and_remove() {
   const double gate_x = config_.gate.x_mm * kMm;

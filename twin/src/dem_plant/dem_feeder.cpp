@@ -15,11 +15,6 @@ namespace {
 
 constexpr double kMm = 1e-3;
 
-double approach(double value, double target, double max_step) {
-  if (value < target) return std::min(value + max_step, target);
-  return std::max(value - max_step, target);
-}
-
 }  // namespace
 
 void DemPlant::draw_next_feed() {

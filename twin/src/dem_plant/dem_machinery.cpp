@@ -13,11 +13,6 @@ namespace {
 using dem::Vec3;
 constexpr double kMm = 1e-3;
 
-double approach(double value, double target, double max_step) {
-  if (value < target) return std::min(value + max_step, target);
-  return std::max(value - max_step, target);
-}
-
 // A wall jump larger than this is placed directly instead of moved (park <-> stroke start).
 constexpr double kTeleportM = 0.005;
 
@@ -151,7 +146,7 @@ void DemPlant::flip(Fillet& fillet, int plate) {
   }
   for (const std::uint32_t k : fillet.particles) {
     s.position_m[k].z() += low_before - low_after;
-    s.velocity_m_per_s[k] = fillet.velocity_mps;
+    s.velocity_m_per_s[k] = fillet.velocity_m_per_s;
     s.angular_velocity_rad_per_s[k].setZero();
   }
   ++counters_.flips;
@@ -225,7 +220,7 @@ void DemPlant::apply_events(const OutputImage& out) {
     if (stations_.knife_blowing && std::abs(s_m - knife_m) <= knife_window_m) {
       record_exit(f, TrueExit::kFinalReject);
       f.remove = true;
-    } else if (reject_mps < 0.0 && f.velocity_mps.x() < 0.0 && s_m < reject_end_m &&
+    } else if (reject_mps < 0.0 && f.velocity_m_per_s.x() < 0.0 && s_m < reject_end_m &&
                f.upper_m.x() > reject_start_m &&
                f.lower_m.x() < reject_start_m - losses.crate_overhang_mm * kMm) {
       // Only a fillet the reversing belt carries back over its upstream edge: its front still

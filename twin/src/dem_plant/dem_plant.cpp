@@ -10,7 +10,7 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "dem_templates.hpp"
+#include "fl/twin/dem/fillet_generator.hpp"
 
 namespace fl {
 namespace {
@@ -80,10 +80,7 @@ std::shared_ptr<const dem::Model> DemPlant::build_model() const {
   const double ml_gap = 0.5 * m.multilane_gap_mm * kMm;
   for (std::size_t d = 0; d < kDriveCount; ++d) {
     const auto id = static_cast<DriveId>(d);
-    if (id == DriveId::kBulk || id == DriveId::kMultilane1Right ||
-        id == DriveId::kMultilane2Right) {
-      continue;
-    }
+    if (!has_section(id)) continue;
     const BeltSection& section = line_.sections[d];
     if (!(section.end_mm > section.start_mm)) continue;
     const double x0 = section.start_mm * kMm + (id == DriveId::kTakt ? 0.0 : gap);
@@ -175,7 +172,7 @@ DemPlant::DemPlant(const LineConfig& line, const DemPlantConfig& config)
       drives_(line.limits, static_cast<double>(config.shared.belts.drive_delay_s)),
       cameras_(line.cameras, config.shared.cameras, control_step_ns(config)) {
   if (config_.simulation.max_fillets == 0) throw std::invalid_argument("max_fillets must be > 0");
-  templates_ = dem_plant_detail::make_templates(config_.simulation.sub_particle_radius_mm * kMm);
+  templates_ = dem::thesis_fillet_templates(config_.simulation.sub_particle_radius_mm * kMm);
   for (const dem::FilletTemplate& t : templates_) {
     std::vector<dem::BodyBond> bonds;
     bonds.reserve(t.bonds.size());
@@ -298,32 +295,7 @@ void DemPlant::control_step(std::int64_t h_ns, const OutputImage& out) {
 // ---------------------------------------------------------------- particles and poses
 
 void DemPlant::scan_particles() {
-  const dem::State& s = sim_->state();
-  for (Fillet& f : fillets_) {
-    f.particles.clear();
-    f.centroid_m.setZero();
-    f.velocity_mps.setZero();
-    f.lower_m.setConstant(1e9);
-    f.upper_m.setConstant(-1e9);
-  }
-  for (std::size_t k = 0; k < s.size(); ++k) {
-    const std::uint32_t body = s.body[k];
-    if (body >= fillet_of_body_.size() || fillet_of_body_[body] < 0) continue;
-    Fillet& f = fillets_[static_cast<std::size_t>(fillet_of_body_[body])];
-    f.particles.push_back(static_cast<std::uint32_t>(k));
-    f.centroid_m += s.position_m[k];
-    f.velocity_mps += s.velocity_m_per_s[k];
-    const Vec3 r = Vec3::Constant(s.radius_m[k]);
-    f.lower_m = f.lower_m.cwiseMin(s.position_m[k] - r);
-    f.upper_m = f.upper_m.cwiseMax(s.position_m[k] + r);
-  }
-  for (Fillet& f : fillets_) {
-    if (f.particles.empty()) continue;
-    // Equal spheres: the mean is the centre of mass.
-    const double inv = 1.0 / static_cast<double>(f.particles.size());
-    f.centroid_m *= inv;
-    f.velocity_mps *= inv;
-  }
+  dem::gather_sphere_groups(sim_->state(), fillet_of_body_, fillets_);
 }
 
 DemPlant::Pose DemPlant::fit_pose(const Fillet& fillet) const {
@@ -529,7 +501,7 @@ std::vector<DemFilletView> DemPlant::fillets() const {
     v.y_mm = fillet.centroid_m.y() / kMm;
     v.z_mm = fillet.centroid_m.z() / kMm;
     v.angle_rad = pose.angle_rad;
-    v.v_mps = fillet.velocity_mps.x();
+    v.v_mps = fillet.velocity_m_per_s.x();
     v.min_s_mm = fillet.lower_m.x() / kMm;
     v.max_s_mm = fillet.upper_m.x() / kMm;
     v.fed = fillet.fed;

@@ -6,15 +6,6 @@
 #include "fl/twin/fast_plant.hpp"
 
 namespace fl {
-namespace {
-
-// Moves `value` towards `target` by at most `max_step`.
-double approach(double value, double target, double max_step) {
-  if (value < target) return std::min(value + max_step, target);
-  return std::max(value - max_step, target);
-}
-
-}  // namespace
 
 void FastPlant::step_stations(double h_s, const OutputImage& out) {
   FastStationState& stations = state_.stations;

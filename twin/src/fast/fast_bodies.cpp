@@ -29,10 +29,7 @@ void FastPlant::build_segments() {
   for (std::size_t d = 0; d < kDriveCount; ++d) {
     const auto id = static_cast<DriveId>(d);
     // The bulk belt is upstream of s = 0; the right multilane belts share the left's section.
-    if (id == DriveId::kBulk || id == DriveId::kMultilane1Right ||
-        id == DriveId::kMultilane2Right) {
-      continue;
-    }
+    if (!has_section(id)) continue;
     const BeltSection& section = line_.sections[d];
     if (!(section.end_mm > section.start_mm)) continue;
     Segment segment;

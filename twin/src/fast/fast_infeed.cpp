@@ -13,14 +13,6 @@
 #include "fl/twin/fast_plant.hpp"
 
 namespace fl {
-namespace {
-
-double approach(double value, double target, double max_step) {
-  if (value < target) return std::min(value + max_step, target);
-  return std::max(value - max_step, target);
-}
-
-}  // namespace
 
 FilletBody FastPlant::make_body(std::uint8_t members, FastRng& rng) {
   const FastFilletConfig& fillet = config_.fillet;

@@ -11,9 +11,6 @@
 namespace fl {
 namespace {
 
-constexpr std::array<std::string_view, kCameraCount> kCameraNames{
-    "orientation", "position", "multilane1", "multilane2", "final"};
-
 Range probability() { return Range::closed(0.0, 1.0); }
 Range share() { return Range::open(0.0, 1.0); }
 
@@ -133,7 +130,7 @@ void read_stations(YamlMapReader& root, FastPlantConfig& config) {
 }
 
 void read_camera(YamlMapReader& cameras, CameraId id, FastCameraConfig& camera) {
-  YamlMapReader map = cameras.map(kCameraNames[index(id)]);
+  YamlMapReader map = cameras.map(to_string(id));
   camera.latency_s = map.read_float("latency_s", Range::closed(0.0, 1.0));
   camera.jitter_s = map.read_float("jitter_s", Range::closed(0.0, 0.1));
   camera.position_sigma_mm = map.read_float("position_sigma_mm", Range::non_negative());
@@ -151,7 +148,7 @@ void read_camera(YamlMapReader& cameras, CameraId id, FastCameraConfig& camera) 
 }
 
 std::string camera_key(std::size_t c, std::string_view field) {
-  return "cameras." + std::string(kCameraNames[c]) + "." + std::string(field);
+  return "cameras." + std::string(to_string(static_cast<CameraId>(c))) + "." + std::string(field);
 }
 
 void cross_check(YamlReader& reader, const FastPlantConfig& config) {

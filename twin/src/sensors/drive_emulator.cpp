@@ -5,15 +5,6 @@
 #include <cmath>
 
 namespace fl {
-namespace {
-
-// Moves `value` towards `target` by at most `max_step`.
-double approach(double value, double target, double max_step) {
-  if (value < target) return std::min(value + max_step, target);
-  return std::max(value - max_step, target);
-}
-
-}  // namespace
 
 DriveEmulator::DriveEmulator(const std::array<DriveLimits, kDriveCount>& limits, double delay_s)
     : limits_(limits), delay_ns_(std::max<std::int64_t>(0, std::llround(delay_s * 1e9))) {

@@ -5,28 +5,11 @@
 #include <cstdint>
 #include <memory>
 
+#include "../plant_test_support.hpp"
 #include "fl/controller/line_config.hpp"
 #include "fl/twin/dem_plant/dem_plant.hpp"
 
 namespace fl::test {
-
-inline constexpr std::int64_t kMs = 1000000;
-
-// Every product-path drive at its nominal speed as fast as allowed; no infeed (bulk and
-// leveller off, so the feeder places nothing), stations idle.
-inline OutputImage belts_running(const LineConfig& line) {
-  OutputImage out{};
-  for (std::size_t d = 0; d < kDriveCount; ++d) {
-    out.drives[d].enable = true;
-    out.drives[d].speed_mps = line.sections[d].nominal_speed_mps;
-  }
-  out.drives[index(DriveId::kMultilane1Right)].speed_mps =
-      line.sections[index(DriveId::kMultilane1Left)].nominal_speed_mps;
-  out.drives[index(DriveId::kMultilane2Right)].speed_mps =
-      line.sections[index(DriveId::kMultilane2Left)].nominal_speed_mps;
-  out.drives[index(DriveId::kBulk)].speed_mps = 0.0F;
-  return out;
-}
 
 // The shipped configuration (7 mm spheres) on one engine thread: a test rig holds a few
 // fillets (under 200 spheres), where the threads' barriers cost more than they share, above

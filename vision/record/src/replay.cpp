@@ -28,43 +28,8 @@ std::string format(const char* pattern, Args... args) {
 
 std::string time_s(std::int64_t ns) { return format("t=%.9f", static_cast<double>(ns) / 1e9); }
 
-const char* hand_name(Hand hand) {
-  switch (hand) {
-    case Hand::kLeft:
-      return "left";
-    case Hand::kRight:
-      return "right";
-    default:
-      return "unknown";
-  }
-}
-
-const char* side_name(SideUp side) {
-  switch (side) {
-    case SideUp::kSkin:
-      return "skin";
-    case SideUp::kBone:
-      return "bone";
-    default:
-      return "unknown";
-  }
-}
-
-const char* state_name(LineState state) {
-  switch (state) {
-    case LineState::kStopped:
-      return "stopped";
-    case LineState::kStarting:
-      return "starting";
-    case LineState::kRunning:
-      return "running";
-    case LineState::kStopping:
-      return "stopping";
-    case LineState::kFault:
-      return "fault";
-  }
-  return "?";
-}
+// printf's %s of a name from process_image.hpp (to_string's views are whole literals).
+const char* name(std::string_view text) { return text.data(); }
 
 std::string estimate_line(const FilletEstimate& e) {
   return format(
@@ -72,7 +37,7 @@ std::string estimate_line(const FilletEstimate& e) {
       "singulated=%d",
       static_cast<double>(e.x_mm), static_cast<double>(e.y_mm),
       static_cast<double>(e.angle_rad) * kDegPerRad, static_cast<double>(e.confidence),
-      hand_name(e.hand), side_name(e.side), e.singulated ? 1 : 0);
+      name(to_string(e.hand)), name(to_string(e.side)), e.singulated ? 1 : 0);
 }
 
 GoldenEntry frame_entry(CameraId camera, std::int64_t exposure_ns, const FrameResult& result) {
@@ -115,7 +80,7 @@ std::vector<std::pair<std::string, std::string>> output_fields(const OutputImage
   for (std::size_t d = 0; d < kDriveCount; ++d) {
     const DriveCommand& drive = out.drives[d];
     fields.emplace_back(
-        "drive." + std::string(config_name(static_cast<DriveId>(d))),
+        "drive." + std::string(to_string(static_cast<DriveId>(d))),
         format("enable=%d speed_mps=%.4f accel_mps2=%.3f", drive.enable ? 1 : 0,
                static_cast<double>(drive.speed_mps), static_cast<double>(drive.accel_mps2)));
   }
@@ -130,7 +95,7 @@ std::vector<std::pair<std::string, std::string>> output_fields(const OutputImage
   fields.emplace_back("centring_stroke", out.centring_stroke ? "1" : "0");
   fields.emplace_back("squeeze_roller_down", out.squeeze_roller_down ? "1" : "0");
   fields.emplace_back("final_reject", out.final_reject ? "1" : "0");
-  fields.emplace_back("state", state_name(out.state));
+  fields.emplace_back("state", std::string(to_string(out.state)));
   fields.emplace_back("active_faults", format("0x%08x", out.active_faults));
   return fields;
 }
@@ -146,8 +111,8 @@ std::string record_line(const FilletRecord& r) {
       "flip_plate1=%d flip_plate2=%d multilane_unit=%d angle_at_camera1_deg=%.2f "
       "final_angle_deg=%.2f final_y_mm=%.2f",
       r.id, static_cast<double>(r.created_ns) / 1e9, to_string(r.outcome), to_string(r.lost_reason),
-      hand_name(r.hand), side_name(r.side_seen), r.singulated ? 1 : 0, r.flip_plate1 ? 1 : 0,
-      r.flip_plate2 ? 1 : 0, static_cast<int>(r.multilane_unit),
+      name(to_string(r.hand)), name(to_string(r.side_seen)), r.singulated ? 1 : 0,
+      r.flip_plate1 ? 1 : 0, r.flip_plate2 ? 1 : 0, static_cast<int>(r.multilane_unit),
       static_cast<double>(r.angle_at_camera1_rad) * kDegPerRad,
       static_cast<double>(r.final_angle_rad) * kDegPerRad, static_cast<double>(r.final_y_mm));
 }
@@ -175,7 +140,7 @@ GoldenEntry end_entry(const LineController& controller, std::int64_t time_ns) {
     entry.lines.push_back("outcome." + std::string(to_string(static_cast<Outcome>(o))) + "=" +
                           std::to_string(c.outcomes[o]));
   }
-  entry.lines.push_back(std::string("state=") + state_name(controller.state()));
+  entry.lines.push_back("state=" + std::string(to_string(controller.state())));
   entry.lines.push_back(format("active_faults=0x%08x", controller.active_faults()));
   return entry;
 }

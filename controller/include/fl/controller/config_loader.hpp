@@ -23,8 +23,9 @@ LineConfig load_line_config(const std::filesystem::path& file);
 // The same from text; `source_name` stands for the file name in messages.
 LineConfig parse_line_config(std::string_view yaml_text, std::string_view source_name);
 
-// Names of drives and cameras as keys in the file: "multilane1_left", "orientation".
-std::string_view config_name(DriveId id);
-std::string_view config_name(CameraId id);
+// Names of drives and cameras as keys in the file: "multilane1_left", "orientation". The
+// same as to_string (process_image.hpp), which new code should call.
+inline std::string_view config_name(DriveId id) { return to_string(id); }
+inline std::string_view config_name(CameraId id) { return to_string(id); }
 
 }  // namespace fl

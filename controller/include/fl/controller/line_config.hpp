@@ -27,6 +27,12 @@ struct BeltSection {
   float nominal_speed_mps = 0.0F;
 };
 
+// Whether a drive moves a section of the product path: the bulk belt is upstream of s = 0,
+// and a multilane unit's section belongs to its left drive, so these three have none.
+constexpr bool has_section(DriveId id) {
+  return id != DriveId::kBulk && id != DriveId::kMultilane1Right && id != DriveId::kMultilane2Right;
+}
+
 struct CameraMount {
   float s_mm = 0.0F;              // line position of the optical axis
   float field_of_view_mm = 0.0F;  // length of belt seen along travel

@@ -7,6 +7,8 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
+#include <string_view>
 #include <type_traits>
 
 namespace fl {
@@ -47,6 +49,67 @@ inline constexpr std::size_t index(CameraId id) { return static_cast<std::size_t
 
 enum class Hand : std::uint8_t { kUnknown, kLeft, kRight };
 enum class SideUp : std::uint8_t { kUnknown, kSkin, kBone };
+
+// What the line as a whole is doing (OutputImage::state).
+enum class LineState : std::uint8_t { kStopped, kStarting, kRunning, kStopping, kFault };
+
+// ---------------------------------------------------------------- names
+
+// The one spelling of every identifier, used as config/line.yaml keys, in the HMI's JSON and
+// in replay goldens. Indexed by the enum's value.
+inline constexpr std::array<std::string_view, kDriveCount> kDriveNames{"bulk",
+                                                                       "takt",
+                                                                       "transition1",
+                                                                       "transition2",
+                                                                       "guide",
+                                                                       "reject",
+                                                                       "centring",
+                                                                       "multilane1_left",
+                                                                       "multilane1_right",
+                                                                       "multilane2_left",
+                                                                       "multilane2_right",
+                                                                       "squeeze",
+                                                                       "outfeed"};
+inline constexpr std::array<std::string_view, kCameraCount> kCameraNames{
+    "orientation", "position", "multilane1", "multilane2", "final"};
+inline constexpr std::array<std::string_view, 3> kHandNames{"unknown", "left", "right"};
+inline constexpr std::array<std::string_view, 3> kSideUpNames{"unknown", "skin", "bone"};
+inline constexpr std::array<std::string_view, 5> kLineStateNames{"stopped", "starting", "running",
+                                                                 "stopping", "fault"};
+
+namespace detail {
+constexpr const auto& names_of(DriveId /*tag*/) { return kDriveNames; }
+constexpr const auto& names_of(CameraId /*tag*/) { return kCameraNames; }
+constexpr const auto& names_of(Hand /*tag*/) { return kHandNames; }
+constexpr const auto& names_of(SideUp /*tag*/) { return kSideUpNames; }
+constexpr const auto& names_of(LineState /*tag*/) { return kLineStateNames; }
+
+template <typename Id>
+constexpr std::string_view name_of(Id id) {
+  const auto& names = names_of(id);
+  const auto i = static_cast<std::size_t>(id);
+  return i < names.size() ? names[i] : std::string_view("unknown");
+}
+}  // namespace detail
+
+// "multilane1_left", "orientation", "left", "skin", "running"; "unknown" for a value outside
+// the enum.
+constexpr std::string_view to_string(DriveId id) { return detail::name_of(id); }
+constexpr std::string_view to_string(CameraId id) { return detail::name_of(id); }
+constexpr std::string_view to_string(Hand hand) { return detail::name_of(hand); }
+constexpr std::string_view to_string(SideUp side) { return detail::name_of(side); }
+constexpr std::string_view to_string(LineState state) { return detail::name_of(state); }
+
+// The inverse of to_string: parse<DriveId>("takt"); nullopt for a name it does not give.
+template <typename Id>
+requires requires(Id id) { detail::names_of(id); }
+constexpr std::optional<Id> parse(std::string_view name) {
+  const auto& names = detail::names_of(Id{});
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (names[i] == name) return static_cast<Id>(i);
+  }
+  return std::nullopt;
+}
 
 // ---------------------------------------------------------------- inputs
 
@@ -112,8 +175,6 @@ struct DriveCommand {
   float speed_mps = 0.0F;   // target surface speed, negative reverses
   float accel_mps2 = 0.0F;  // ramp the drive must keep (within its configured limit)
 };
-
-enum class LineState : std::uint8_t { kStopped, kStarting, kRunning, kStopping, kFault };
 
 struct OutputImage {
   std::array<DriveCommand, kDriveCount> drives{};

@@ -13,11 +13,8 @@
 
 namespace fl::hmi {
 
-const char* drive_name(DriveId drive);     // "bulk", "takt", "transition1", ...
-const char* camera_name(CameraId camera);  // "orientation", "position", ...
-std::optional<DriveId> drive_from_name(std::string_view name);
-std::optional<CameraId> camera_from_name(std::string_view name);
-const char* state_name(LineState state);  // "stopped", "starting", ...
+// Drives, cameras, hands, sides and line states go out as fl::to_string names
+// (process_image.hpp); fl::parse reads them back.
 
 // Fillets placed per minute over the last minute of snapshots (less at the start).
 class ThroughputMeter {

@@ -50,6 +50,10 @@ class CsvTable {
 // Shortest decimal text that reads back as the same double ("0.1", "1e+300").
 std::string format_double(double value);
 
+// One text field as CsvTable writes it: quoted, quotes doubled, when it holds a comma, quote,
+// CR or LF; as it is otherwise. For writers that append rows themselves.
+std::string csv_quote(std::string_view field);
+
 // RFC 4180 reader (also accepts LF line ends): rows of fields, quotes removed. Throws
 // ReportError for an unterminated quote or text after a closing quote.
 std::vector<std::vector<std::string>> parse_csv(std::string_view text);

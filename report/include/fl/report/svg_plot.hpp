@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "fl/report/csv.hpp"  // ReportError
@@ -80,6 +81,9 @@ struct HeatMap {
 // Create parent folders; throw ReportError when the file cannot be written.
 void write_svg(const Plot& plot, const std::filesystem::path& file);
 void write_svg(const HeatMap& map, const std::filesystem::path& file);
+
+// Text safe inside XML or HTML elements and quoted attributes: & < > " ' as entities.
+[[nodiscard]] std::string xml_escape(std::string_view text);
 
 // "Nice" tick positions (1, 2, 5 x 10^k steps) covering [min, max]; for a log axis the
 // decades (and 2, 5 within them when fewer than three decades are shown).

@@ -131,4 +131,8 @@ FilletTemplate generate_fillet_template(const TriangleMesh& mesh_m, const std::s
 std::vector<FilletTemplate> generate_thesis_fillets(const TriangleMesh& base_mesh_m,
                                                     const FilletGeneratorOptions& options = {});
 
+// The six thesis types from the nominal mesh (make_fillet_mesh()) at one sub-particle radius,
+// the other options at their defaults: the templates the DEM plant and the bulk scene use.
+std::vector<FilletTemplate> thesis_fillet_templates(double sub_particle_radius_m);
+
 }  // namespace fl::dem

@@ -22,6 +22,7 @@
 
 #include "fl/twin/dem/fillet_template.hpp"
 #include "fl/twin/dem/simulation.hpp"
+#include "fl/twin/dem/sphere_group.hpp"
 
 namespace fl {
 
@@ -168,15 +169,10 @@ class BulkScene {
   [[nodiscard]] LevellerLoad leveller_load_mean() const { return load_mean_; }
 
  private:
-  struct Fillet {
+  struct Fillet : dem::SphereGroup {
     std::uint32_t id = 0;
     std::uint8_t variant = 0;
     std::uint32_t body = 0;
-    std::vector<std::uint32_t> particles;
-    dem::Vec3 centroid_m = dem::Vec3::Zero();
-    dem::Vec3 velocity_m_per_s = dem::Vec3::Zero();
-    dem::Vec3 lower_m = dem::Vec3::Zero();
-    dem::Vec3 upper_m = dem::Vec3::Zero();
     bool passed_gate = false;
     bool remove = false;
   };

@@ -46,6 +46,7 @@
 #include "fl/controller/plant.hpp"
 #include "fl/twin/dem/fillet_template.hpp"
 #include "fl/twin/dem/simulation.hpp"
+#include "fl/twin/dem/sphere_group.hpp"
 #include "fl/twin/dem_plant/dem_plant_config.hpp"
 #include "fl/twin/fast_plant_config.hpp"
 #include "fl/twin/sensors/camera_emulator.hpp"
@@ -127,7 +128,8 @@ class DemPlant final : public Plant {
   [[nodiscard]] double engine_timestep_s() const;
 
  private:
-  struct Fillet {
+  // The sphere group's fields are from the last particle pass.
+  struct Fillet : dem::SphereGroup {
     std::uint32_t plant_id = 0;
     std::uint32_t group_id = 0;
     std::uint8_t variant = 0;
@@ -137,15 +139,9 @@ class DemPlant final : public Plant {
     bool squeezed_ok = false;
     bool thick_passed_roller = false;
     bool remove = false;
-    // From the last particle pass.
-    Eigen::Vector3d centroid_m = Eigen::Vector3d::Zero();
-    Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();
-    Eigen::Vector3d lower_m = Eigen::Vector3d::Zero();
-    Eigen::Vector3d upper_m = Eigen::Vector3d::Zero();
     double previous_s_m = 0.0;
     double progress_s_m = 0.0;
     std::int64_t progress_ns = 0;
-    std::vector<std::uint32_t> particles;  // engine indices, valid until the next engine step
   };
   struct Pose {
     double angle_rad = 0.0;

@@ -6,6 +6,7 @@
 // InputImage::drives. Nothing here allocates or draws random numbers.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -14,6 +15,13 @@
 #include "fl/controller/process_image.hpp"
 
 namespace fl {
+
+// Moves `value` towards `target` by at most `max_step`: one step of a ramp, for the belts here
+// and for the station actuators of both plants.
+inline double approach(double value, double target, double max_step) {
+  if (value < target) return std::min(value + max_step, target);
+  return std::max(value - max_step, target);
+}
 
 struct DriveState {
   double speed_mps = 0.0;
