@@ -28,6 +28,39 @@ struct Scenario {
   apps::Kpis run() { return apps::run_closed_loop(line, plant, options); }
 };
 
+// Counts the scans whose input image shows a fault's cause and those among them whose output
+// image lacks the reaction: a reaction "in the same scan" leaves none missed.
+struct ScanReaction {
+  std::uint64_t cause_scans = 0;
+  std::uint64_t missed_scans = 0;
+  void check(bool cause, bool reacted) {
+    if (!cause) return;
+    ++cause_scans;
+    if (!reacted) ++missed_scans;
+  }
+};
+
+bool all_drives_at_rest(const OutputImage& out) {
+  for (const DriveCommand& drive : out.drives) {
+    if (drive.speed_mps != 0.0F) return false;
+  }
+  return true;
+}
+
+bool all_drives_disabled(const OutputImage& out) {
+  for (const DriveCommand& drive : out.drives) {
+    if (drive.enable || drive.speed_mps != 0.0F) return false;
+  }
+  return true;
+}
+
+bool any_drive_fault(const InputImage& in) {
+  for (const DriveFeedback& drive : in.drives) {
+    if (drive.fault) return true;
+  }
+  return false;
+}
+
 void expect_books_balance(const apps::Kpis& kpis) {
   EXPECT_TRUE(kpis.truth_balanced);
   EXPECT_EQ(kpis.truth.on_line_at_end, 0U);
@@ -83,6 +116,42 @@ TEST(FaultScenarios, SilentOrientationCameraRejectsWhatItCannotSee) {
   EXPECT_GT(kpis.placed_per_minute, 40.0);  // 100 s of the 120 s produced
 }
 
+// Camera 1 floods from 30 s to 40 s: every frame claims 255 detections, 8 fit. The flood
+// fault shows in the scan that reads the first such frame, only the 8 held estimates are
+// judged, the line keeps running (the fault degrades, it does not stop), and after the
+// camera is sane again an acknowledge clears the fault.
+TEST(FaultScenarios, FloodingCameraIsBoundedShownInTheSameScanAndCleared) {
+  Scenario scenario;
+  auto& camera = scenario.plant.faults().cameras[index(CameraId::kOrientation)];
+  scenario.options.before_scan = [&](std::int64_t time_ns, LineController& controller) {
+    camera.flood = time_ns >= 30 * kSecond && time_ns < 40 * kSecond;
+    if (time_ns == 45 * kSecond) controller.acknowledge_faults();
+  };
+  ScanReaction reaction;
+  bool stopped_while_flooded = false;
+  std::uint32_t faults_at_50_s = ~0U;
+  scenario.options.after_update = [&](const InputImage& in, const OutputImage& out) {
+    const bool flooded = in.cameras[index(CameraId::kOrientation)].count > kMaxEstimatesPerFrame;
+    reaction.check(flooded, (out.active_faults & fault_bit(FaultCode::kEstimateFlood)) != 0);
+    if (flooded && out.state != LineState::kRunning) stopped_while_flooded = true;
+    if (in.time_ns == 50 * kSecond) faults_at_50_s = out.active_faults;
+  };
+  const apps::Kpis kpis = scenario.run();
+  SCOPED_TRACE(apps::format_kpis(kpis));
+  expect_books_balance(kpis);
+  // The image holds a frame until the next one, so about all 1000 scans of the 10 s flood
+  // show a flooded frame; half of them is a floor that frame timing cannot break.
+  EXPECT_GT(reaction.cause_scans, 500U);
+  EXPECT_EQ(reaction.missed_scans, 0U);
+  EXPECT_FALSE(stopped_while_flooded);
+  EXPECT_EQ(faults_at_50_s & fault_bit(FaultCode::kEstimateFlood), 0U);  // acknowledged at 45 s
+  // The junk beyond the real detections costs rejects, never a wrong placement.
+  EXPECT_GE(
+      static_cast<double>(kpis.truth.outfeed_in_spec) / static_cast<double>(kpis.truth.outfeed),
+      0.97);
+  EXPECT_GT(kpis.placed_per_minute, 40.0);  // 110 s of the 120 s produced normally
+}
+
 // E-stop at 40 s: drives disabled in the same scan; the operator closes the chain,
 // acknowledges and restarts; the fillets on the belts when it stopped stay tracked.
 TEST(FaultScenarios, EstopStopsTheLineAndItRestartsAfterAcknowledge) {
@@ -94,9 +163,16 @@ TEST(FaultScenarios, EstopStopsTheLineAndItRestartsAfterAcknowledge) {
     if (time_ns == 46 * kSecond) controller.acknowledge_faults();
     if (time_ns == 47 * kSecond) controller.request_start();
   };
+  // Every scan that reads the chain open writes every drive disabled (line.md: "same scan").
+  ScanReaction reaction;
+  scenario.options.after_update = [&](const InputImage& in, const OutputImage& out) {
+    reaction.check(!in.estop_ok, out.state == LineState::kFault && all_drives_disabled(out));
+  };
   const apps::Kpis kpis = scenario.run();
   SCOPED_TRACE(apps::format_kpis(kpis));
   EXPECT_TRUE(saw_fault_state);
+  EXPECT_GT(reaction.cause_scans, 0U);
+  EXPECT_EQ(reaction.missed_scans, 0U);
   EXPECT_NE(kpis.faults_seen & fault_bit(FaultCode::kEstop), 0U);
   expect_books_balance(kpis);
   EXPECT_GT(kpis.placed_per_minute, 40.0);  // it did restart
@@ -110,8 +186,15 @@ TEST(FaultScenarios, DriveTripStopsTheLineAndNothingVanishes) {
     scenario.plant.faults().drive_fault[index(DriveId::kMultilane2Right)] = time_ns >= 60 * kSecond;
   };
   scenario.options.drain_timeout_s = 5.0;
+  // Every scan that reads a drive fault stops every belt in that scan.
+  ScanReaction reaction;
+  scenario.options.after_update = [&](const InputImage& in, const OutputImage& out) {
+    reaction.check(any_drive_fault(in), out.state == LineState::kFault && all_drives_at_rest(out));
+  };
   const apps::Kpis kpis = scenario.run();
   SCOPED_TRACE(apps::format_kpis(kpis));
+  EXPECT_GT(reaction.cause_scans, 0U);
+  EXPECT_EQ(reaction.missed_scans, 0U);
   EXPECT_NE(kpis.faults_seen & fault_bit(FaultCode::kDriveFault), 0U);
   EXPECT_TRUE(kpis.truth_balanced);
   EXPECT_TRUE(kpis.ledger_balanced);

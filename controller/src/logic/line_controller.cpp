@@ -54,6 +54,7 @@ struct LineController::Impl {
     last_time_ns = 0;
     first_scan = true;
     start_requested = stop_requested = ack_requested = false;
+    camera_flooded = {};
     counters = ControllerCounters{};
   }
 
@@ -82,11 +83,16 @@ struct LineController::Impl {
   void update_camera_faults(const InputImage& in, const ScanContext& ctx) {
     bool any_silent = false;
     std::uint8_t silent_camera = 0;
+    bool any_flooded = false;
+    std::uint8_t flooded_camera = 0;
     for (std::size_t c = 0; c < kCameraCount; ++c) {
       const auto camera = static_cast<CameraId>(c);
       const logic::FrameIntake intake = tracker.ingest(in, camera, events);
-      if (intake.flooded)
-        set_fault(FaultCode::kEstimateFlood, true, in.time_ns, static_cast<std::uint8_t>(c));
+      // The flood fault lasts while a camera's newest frame is flooded, so that it clears
+      // (and an acknowledge can reset its latch) once the camera delivers sane frames again.
+      if (intake.new_frame) camera_flooded[c] = intake.flooded;
+      if (camera_flooded[c] && !any_flooded) flooded_camera = static_cast<std::uint8_t>(c);
+      any_flooded = any_flooded || camera_flooded[c];
       const CameraMount& mount = config.cameras[c];
       const float silent_after_s = std::max(mount.max_age_s, kSilentPeriods * mount.period_s);
       // Before a camera's first frame, silence counts from the start of running.
@@ -103,6 +109,7 @@ struct LineController::Impl {
       events.push(Event{in.time_ns, EventCode::kCameraSilent, 0, silent_camera, 0.0F});
     }
     set_fault(FaultCode::kCameraSilent, any_silent, in.time_ns, silent_camera);
+    set_fault(FaultCode::kEstimateFlood, any_flooded, in.time_ns, flooded_camera);
   }
 
   void update(const InputImage& in, OutputImage& out) {
@@ -272,6 +279,7 @@ struct LineController::Impl {
   std::uint32_t faults = 0;
   std::uint32_t latched_faults = 0;
   std::uint64_t overflows_seen = 0;
+  std::array<bool, kCameraCount> camera_flooded{};  // the camera's newest frame was flooded
   std::int32_t consecutive_overruns = 0;
   float state_time_s = 0.0F;
   std::int64_t last_time_ns = 0;

@@ -114,6 +114,92 @@ TEST_F(LineControllerTest, SilentCameraIsAFault) {
   EXPECT_NE(controller.active_faults() & fault_bit(FaultCode::kCameraSilent), 0U);
 }
 
+// A frame that claims more detections than it holds raises the flood fault in the scan that
+// reads it; the line keeps running (it only degrades), the fault clears with the next sane
+// frame, and after an acknowledge the line can be started again.
+TEST_F(LineControllerTest, EstimateFloodIsShownInTheSameScanAndClearsWhenFramesAreSane) {
+  controller.request_start();
+  scans(3);
+  ASSERT_EQ(controller.state(), LineState::kRunning);
+  const float camera_s = config.cameras[index(CameraId::kOrientation)].s_mm;
+  in.time_ns += 10'000'000;
+  test::publish(in, config, CameraId::kOrientation, camera_s,
+                test::good_estimate(Hand::kLeft, SideUp::kSkin, 0.0F));
+  in.cameras[index(CameraId::kOrientation)].count = 255;  // the most a corrupt count can claim
+  controller.update(in, out);
+  EXPECT_NE(out.active_faults & fault_bit(FaultCode::kEstimateFlood), 0U);
+  EXPECT_EQ(out.state, LineState::kRunning);
+  // Exactly the 8 estimates the frame holds were judged (each one refused, unmatched or a
+  // duplicate: they all lie on one spot with no tracked item), none of the 247 it only claims.
+  const ControllerCounters& counters = controller.counters();
+  EXPECT_EQ(
+      counters.estimates_rejected + counters.detections_unmatched + counters.detections_duplicate,
+      kMaxEstimatesPerFrame);
+
+  in.time_ns += 10'000'000;
+  test::publish(in, config, CameraId::kOrientation, camera_s,
+                test::good_estimate(Hand::kLeft, SideUp::kSkin, 0.0F));
+  controller.update(in, out);
+  // Cause gone: still shown (latched) until the operator acknowledges.
+  EXPECT_NE(out.active_faults & fault_bit(FaultCode::kEstimateFlood), 0U);
+  controller.acknowledge_faults();
+  scans(1);
+  EXPECT_EQ(out.active_faults & fault_bit(FaultCode::kEstimateFlood), 0U);
+
+  // A stopped line starts again: nothing latched is left to refuse the start.
+  controller.request_stop();
+  scans(1);
+  for (int i = 0; i < 3500 && controller.state() != LineState::kStopped; ++i) scans(1);
+  ASSERT_EQ(controller.state(), LineState::kStopped);
+  controller.acknowledge_faults();  // the camera fell silent meanwhile; nothing is running
+  scans(1);
+  controller.request_start();
+  scans(2);
+  EXPECT_EQ(controller.state(), LineState::kRunning);
+}
+
+// Fillets that camera 1 sees but the tracker never created (as if the takt's beam were
+// blind) pile up where the belts stand still, until the tracker's 64 slots are full: the next
+// one cannot be tracked, and the line stops rather than run with a fillet it does not know.
+TEST_F(LineControllerTest, TrackerOverflowStopsTheLine) {
+  controller.request_start();
+  scans(3);
+  const CameraMount& camera = config.cameras[index(CameraId::kOrientation)];
+  const float half_view_mm = 0.5F * camera.field_of_view_mm - 10.0F;  // inside the view
+  constexpr float kSpeedMmPerScan = 10.0F;                            // 1 m/s on the guide belt
+  constexpr int kScansApart = 15;  // fillets 150 mm apart: beyond the 80 mm gate
+  bool overflowed = false;
+  // A fillet every 150 ms; 65 need under 10000 scans, 20000 leaves room for adoption delays.
+  for (int i = 0; i < 20000 && !overflowed; ++i) {
+    in.time_ns += 10'000'000;
+    test::move_belt(in, config, DriveId::kGuide, kSpeedMmPerScan);
+    if (i % 4 == 0) {  // camera 1's 40 ms frame period
+      CameraFrame& frame = in.cameras[index(CameraId::kOrientation)];
+      ++frame.sequence;
+      frame.frame_time_ns = in.time_ns;
+      frame.count = 0;
+      // Every fillet that entered the view at its own time and has moved with the belt since.
+      for (int entered = i - i % kScansApart; entered >= 0 && frame.count < kMaxEstimatesPerFrame;
+           entered -= kScansApart) {
+        const float x_mm = -half_view_mm + kSpeedMmPerScan * static_cast<float>(i - entered);
+        if (x_mm > half_view_mm) break;
+        FilletEstimate estimate = test::good_estimate(Hand::kLeft, SideUp::kSkin, 0.0F);
+        estimate.x_mm = x_mm;
+        frame.estimates[frame.count++] = estimate;
+      }
+    }
+    controller.update(in, out);
+    overflowed = (out.active_faults & fault_bit(FaultCode::kTrackerOverflow)) != 0;
+  }
+  ASSERT_TRUE(overflowed) << "tracked " << controller.tracked_count() << ", adopted "
+                          << controller.counters().items_adopted << ", closed "
+                          << controller.counters().items_closed;
+  // The scan that shows the fault already stops every belt; the 64 tracked stay tracked.
+  EXPECT_EQ(out.state, LineState::kFault);
+  for (const DriveCommand& drive : out.drives) EXPECT_EQ(drive.speed_mps, 0.0F);
+  EXPECT_EQ(controller.tracked_count(), kMaxTrackedItems);
+}
+
 // Time and inputs are everything the logic reads: replaying the same input images gives
 // bit-identical output images.
 TEST_F(LineControllerTest, SameInputsGiveBitIdenticalOutputs) {

@@ -216,6 +216,10 @@ void CameraEmulator::publish(std::int64_t time_ns, const CameraFaultSet& faults,
       frame.sequence = ++state.sequence;
       state.last_frame_time_ns = frame.frame_time_ns;
       copy_bytes(frames[c], frame);
+      // A corrupt camera node: the count claims more detections than a frame can hold; the
+      // entries beyond the real ones are whatever the buffer held. No draw, so the random
+      // sequence (and every recorded golden run) stays the same with the fault off.
+      if (faults[c].flood) frames[c].count = std::numeric_limits<std::uint8_t>::max();
       ++counters_.frames_published[c];
     }
     for (std::size_t k = ready; k < state.pending_count; ++k) {

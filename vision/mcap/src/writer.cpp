@@ -1,6 +1,8 @@
 #include "fl/mcap/writer.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -12,23 +14,35 @@ using detail::ByteWriter;
 
 namespace {
 
+// The system's reason for the last failed stream operation ("No space left on device"):
+// what an operator needs to act on a full disk. The streams keep errno from the write(2).
+std::string system_reason() {
+  const int error = errno;
+  return error != 0 ? std::string(": ") + std::strerror(error) : std::string();
+}
+
 std::unique_ptr<std::ofstream> open_for_writing(const std::filesystem::path& path) {
+  errno = 0;
   auto file = std::make_unique<std::ofstream>(path, std::ios::binary | std::ios::trunc);
-  if (!*file) throw std::runtime_error("mcap: cannot create " + path.string());
+  if (!*file) throw std::runtime_error("mcap: cannot create " + path.string() + system_reason());
   return file;
 }
 
 }  // namespace
 
-Writer::Writer(std::ostream& out, WriterOptions options) : out_(out), options_(std::move(options)) {
+Writer::Writer(std::ostream& out, WriterOptions options)
+    : out_(out), options_(std::move(options)), where_("mcap") {
   write_start();
 }
 
 Writer::Writer(const std::filesystem::path& path, WriterOptions options)
-    : Writer(open_for_writing(path), std::move(options)) {}
+    : Writer(open_for_writing(path), std::move(options), "mcap: " + path.string()) {}
 
-Writer::Writer(std::unique_ptr<std::ofstream> file, WriterOptions options)
-    : owned_file_(std::move(file)), out_(*owned_file_), options_(std::move(options)) {
+Writer::Writer(std::unique_ptr<std::ofstream> file, WriterOptions options, std::string where)
+    : owned_file_(std::move(file)),
+      out_(*owned_file_),
+      options_(std::move(options)),
+      where_(std::move(where)) {
   write_start();
 }
 
@@ -48,9 +62,15 @@ Writer::~Writer() {
 }
 
 void Writer::write_bytes(ByteView bytes) {
+  // A stream that failed once (disk full) stays failed: every later record is refused too,
+  // and what reached the file before stays a readable prefix (scan() recovers it).
+  errno = 0;
   out_.write(reinterpret_cast<const char*>(bytes.data()),
              static_cast<std::streamsize>(bytes.size()));
-  if (!out_) throw std::runtime_error("mcap: write failed at byte " + std::to_string(position_));
+  if (!out_) {
+    throw std::runtime_error(where_ + ": write failed at byte " + std::to_string(position_) +
+                             system_reason());
+  }
   if (in_data_section_) data_crc_ = crc32(bytes, data_crc_);
   position_ += bytes.size();
 }
@@ -179,6 +199,14 @@ void Writer::flush_chunk() {
   index.message_index_length = position_ - message_index_start;
   chunk_indexes_.push_back(std::move(index));
   ++statistics_.chunk_count;
+  // Hand the whole chunk to the file system now, not when the stream's buffer happens to
+  // fill: a recorder that dies (power loss, kill) loses at most the open chunk, and a full
+  // disk is reported at the chunk that did not fit.
+  errno = 0;
+  out_.flush();
+  if (!out_)
+    throw std::runtime_error(where_ + ": flush failed at byte " + std::to_string(position_) +
+                             system_reason());
 
   chunk_records_.clear();
   chunk_message_index_.clear();
@@ -235,11 +263,13 @@ void Writer::close() {
     write_record(Opcode::kFooter, body);
   }
   write_bytes(kMagic);
+  errno = 0;
   out_.flush();
-  if (!out_) throw std::runtime_error("mcap: flush failed");
+  if (!out_) throw std::runtime_error(where_ + ": flush failed" + system_reason());
   if (owned_file_) {
     owned_file_->close();
-    if (!*owned_file_) throw std::runtime_error("mcap: closing the file failed");
+    if (!*owned_file_)
+      throw std::runtime_error(where_ + ": closing the file failed" + system_reason());
   }
 }
 

@@ -1,9 +1,13 @@
-// Malformed input: truncated recordings are recovered up to the damage, corrupted bytes give
-// an error or the right data, and every error names a byte offset. Run these under ASan
-// (FL_SANITIZE=ON) to show that no input reads out of bounds.
+// Malformed input: truncated recordings are recovered up to the damage (every chunk that
+// ended before a cut, as power loss leaves them), corrupted bytes give an error or the right
+// data, every error names a byte offset, and a full disk is named with the file. Run these under
+// ASan (FL_SANITIZE=ON) to show that no input reads out of bounds.
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <filesystem>
 #include <sstream>
 
 #include "codec.hpp"
@@ -105,6 +109,92 @@ TEST(Truncation, RecordingInterruptedMidWriteKeepsItsFlushedChunks) {
   // 1.5 KB frames close a 4 KiB chunk every 3 frames: 13 chunks (39 frames) are on disk.
   EXPECT_EQ(result.messages.size(), 39U);
   writer.close();
+}
+
+// Power loss (or a killed recorder) at any byte: every chunk whose record ended before the
+// cut comes back whole, so what is lost is bounded by the chunk the cut went through (plus the
+// chunk still open in the writer, which never reached the file).
+TEST_P(Truncation, EveryCutKeepsEveryChunkThatEndedBeforeIt) {
+  WriterOptions options;
+  options.compression = GetParam();
+  const WrittenFile file = write_recording(options, small_shape());
+  const Reader reader = open_bytes(file.bytes);
+  const std::vector<ChunkIndex>& chunks = reader.summary().chunk_indexes;
+  ASSERT_GT(chunks.size(), 5U);  // the shape gives about 15: a loss bound needs several
+  for (const std::size_t length : probe_offsets(file.bytes)) {
+    // The recording's log times rise with each message, so a chunk holds exactly the
+    // messages inside its time range.
+    std::size_t in_whole_chunks = 0;
+    for (const ChunkIndex& chunk : chunks) {
+      if (chunk.chunk_start_offset + chunk.chunk_length > length) continue;
+      in_whole_chunks += static_cast<std::size_t>(
+          std::count_if(file.messages.begin(), file.messages.end(), [&](const Message& message) {
+            return message.log_time >= chunk.message_start_time &&
+                   message.log_time <= chunk.message_end_time;
+          }));
+    }
+    const ScanResult result = scan(MemorySource(cut(file.bytes, length)));
+    ASSERT_EQ(result.messages.size(), in_whole_chunks) << "cut at " << length;
+  }
+}
+
+// The writer on a real file, read back from the disk after every message as a crash at that
+// moment would leave it: every closed chunk is there, so the loss never exceeds the open chunk
+// (the writer flushes each chunk instead of leaving its tail in the stream's buffer).
+TEST(PowerLoss, RecorderThatDiesLosesAtMostTheOpenChunk) {
+  const std::filesystem::path path = std::filesystem::temp_directory_path() /
+                                     ("fl_mcap_power_loss_" + std::to_string(::getpid()) + ".mcap");
+  WriterOptions options;
+  options.chunk_size = 4 * 1024;  // 1.5 KB frames: a chunk closes every 3 frames
+  constexpr std::size_t kFrameBytes = 1500;
+  constexpr int kFrames = 40;
+  Writer writer(path, options);
+  const std::uint16_t channel = writer.add_channel(0, "/camera", "raw");
+  std::size_t in_closed_chunks = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    const Bytes data = frame_payload(i, kFrameBytes);
+    const std::uint32_t chunks_before = writer.statistics().chunk_count;
+    writer.write_message(
+        {channel, static_cast<std::uint32_t>(i), frame_time(i), frame_time(i), data});
+    if (writer.statistics().chunk_count != chunks_before) {
+      in_closed_chunks = static_cast<std::size_t>(i) + 1;
+    }
+    const ScanResult on_disk = scan_file(path);
+    ASSERT_FALSE(on_disk.complete);
+    ASSERT_EQ(on_disk.messages.size(), in_closed_chunks) << "after frame " << i;
+    // The open chunk holds less than chunk_size of records: at most 2 frames here.
+    ASSERT_LE(static_cast<std::size_t>(i) + 1 - in_closed_chunks, options.chunk_size / kFrameBytes);
+  }
+  writer.close();
+  const ScanResult closed = scan_file(path);
+  EXPECT_TRUE(closed.complete) << closed.stop_reason;
+  EXPECT_EQ(closed.messages.size(), static_cast<std::size_t>(kFrames));
+  std::filesystem::remove(path);
+}
+
+// A full device: the error names the file and the system's reason, at the latest when the
+// first chunk is flushed, and the writer neither crashes nor hides it in close().
+TEST(DiskFull, FullDeviceIsReportedWithTheFileAndTheReason) {
+  const std::filesystem::path full("/dev/full");
+  if (!std::filesystem::exists(full)) GTEST_SKIP() << "no /dev/full here";
+  WriterOptions options;
+  options.chunk_size = 4 * 1024;
+  std::string error;
+  try {
+    Writer writer(full, options);
+    const std::uint16_t channel = writer.add_channel(0, "/camera", "raw");
+    // 10 frames of 1.5 KB close three 4 KiB chunks: the first flush meets the full device.
+    for (int i = 0; i < 10; ++i) {
+      const Bytes data = frame_payload(i, 1500);
+      writer.write_message(
+          {channel, static_cast<std::uint32_t>(i), frame_time(i), frame_time(i), data});
+    }
+    writer.close();
+  } catch (const std::runtime_error& caught) {
+    error = caught.what();
+  }
+  EXPECT_NE(error.find("/dev/full"), std::string::npos) << error;
+  EXPECT_NE(error.find("No space left on device"), std::string::npos) << error;
 }
 
 class Corruption : public ::testing::TestWithParam<Compression> {};

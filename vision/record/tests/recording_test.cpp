@@ -1,16 +1,19 @@
 // Recording round trip and the malformed recordings a replay must refuse with an error that
 // names the record: truncated file, corrupted chunk (CRC), unknown schema, a frame that does
-// not decode.
+// not decode; and a disk that fills up while recording.
 #include "fl/vision/record/recording.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
 
+#include "fl/mcap/reader.hpp"
 #include "fl/mcap/writer.hpp"
 #include "fl/vision/record/replay.hpp"
 
@@ -162,6 +165,104 @@ TEST(Recording, FrameThatDoesNotDecodeNamesTheFrame) {
     EXPECT_NE(what.find("/camera/orientation/image message 1"), std::string::npos) << what;
     EXPECT_NE(what.find("does not decode"), std::string::npos) << what;
   }
+  std::filesystem::remove(path);
+}
+
+// Caps the size of any file this process writes (RLIMIT_FSIZE) while it lives, with SIGXFSZ
+// ignored: write(2) past the cap then fails with EFBIG, as it fails with ENOSPC on a full
+// disk, on the real file system and through the real stream, instead of killing the process.
+class FileSizeCap {
+ public:
+  explicit FileSizeCap(rlim_t bytes) {
+    EXPECT_EQ(::getrlimit(RLIMIT_FSIZE, &saved_), 0);
+    previous_ = std::signal(SIGXFSZ, SIG_IGN);
+    rlimit cap = saved_;
+    cap.rlim_cur = bytes;
+    EXPECT_EQ(::setrlimit(RLIMIT_FSIZE, &cap), 0);
+  }
+  ~FileSizeCap() {
+    ::setrlimit(RLIMIT_FSIZE, &saved_);
+    std::signal(SIGXFSZ, previous_);
+  }
+  FileSizeCap(const FileSizeCap&) = delete;
+  FileSizeCap& operator=(const FileSizeCap&) = delete;
+
+ private:
+  rlimit saved_{};
+  void (*previous_)(int) = nullptr;
+};
+
+// The disk fills up in the middle of a recording: the writer throws an error naming the file
+// and the failed write, refuses every later write without crashing, and the chunks that
+// reached the disk stay readable by the recovery scan.
+TEST(Recording, DiskFullIsAnErrorNamingTheFileAndKeepsTheFlushedChunks) {
+  const auto path = temp_file("disk_full.mcap");
+  // 256 x 256 BGR noise: a PNG of about 197 kB that no compression shrinks, so a 1 MiB chunk
+  // closes with its 6th frame (5 are 986 kB).
+  constexpr int kSidePx = 256;
+  BeltCalibration calibration = small_calibration();
+  calibration.image_width_px = kSidePx;
+  calibration.image_height_px = kSidePx;
+  cv::Mat noise(kSidePx, kSidePx, CV_8UC3);
+  // A linear congruential sequence's high bits, new for every frame (zstd would find a
+  // repeated frame within a chunk): the same bytes every run, and no pattern PNG or zstd can
+  // use.
+  std::uint32_t state = 7;
+  const auto next_noise = [&]() -> const cv::Mat& {
+    for (auto pixel = noise.begin<cv::Vec3b>(); pixel != noise.end<cv::Vec3b>(); ++pixel) {
+      for (int channel = 0; channel < 3; ++channel) {
+        state = state * 1103515245U + 12345U;
+        (*pixel)[channel] = static_cast<std::uint8_t>(state >> 24U);
+      }
+    }
+    return noise;
+  };
+  // Room for the first 1 MiB chunk and its indexes, not for the second.
+  constexpr rlim_t kCapBytes = 1536 * 1024;
+  std::string error;
+  std::uint32_t frames_accepted = 0;
+  {
+    FileSizeCap cap(kCapBytes);
+    RecordingWriter writer(path, {1, {{"source", "test"}}});
+    writer.add_camera(CameraId::kOrientation, calibration);
+    // 40 frames are 7.9 MB: far past the cap.
+    try {
+      for (std::uint32_t sequence = 1; sequence <= 40; ++sequence) {
+        writer.write_frame(CameraId::kOrientation, sequence, sequence * 40'000'000LL, next_noise());
+        ++frames_accepted;
+      }
+    } catch (const std::runtime_error& caught) {
+      error = caught.what();
+    }
+    ASSERT_FALSE(error.empty()) << "40 frames fitted under the cap";
+    // Still refused, still no crash; closing (here and in the destructor) fails the same way.
+    EXPECT_THROW(writer.write_frame(CameraId::kOrientation, 99, 4'000'000'000LL, next_noise()),
+                 std::runtime_error);
+    EXPECT_THROW(writer.close(), std::runtime_error);
+  }
+  EXPECT_NE(error.find(path.string()), std::string::npos) << error;
+  EXPECT_NE(error.find("failed at byte"), std::string::npos) << error;
+  EXPECT_NE(error.find("File too large"), std::string::npos) << error;  // EFBIG's reason
+  EXPECT_LE(std::filesystem::file_size(path), kCapBytes);
+
+  const mcap::ScanResult recovered = mcap::scan_file(path);
+  EXPECT_FALSE(recovered.complete);
+  std::uint32_t frames_recovered = 0;
+  for (const mcap::Message& message : recovered.messages) {
+    const auto channel = recovered.channels.find(message.channel_id);
+    ASSERT_NE(channel, recovered.channels.end());
+    if (channel->second.topic == image_topic(CameraId::kOrientation)) {
+      EXPECT_EQ(message.sequence, frames_recovered + 1);  // in order, none skipped
+      ++frames_recovered;
+    }
+  }
+  // The first chunk (6 frames) is on disk; the frames after it were lost with the chunk that
+  // did not fit, never more than one chunk's worth (6 frames).
+  EXPECT_GE(frames_recovered, 5U);
+  EXPECT_LE(frames_recovered, frames_accepted);
+  EXPECT_LE(frames_accepted - frames_recovered, 6U);
+  // The indexed reader (replay) refuses the file and names it.
+  EXPECT_NE(load_error(path).find(path.string()), std::string::npos);
   std::filesystem::remove(path);
 }
 

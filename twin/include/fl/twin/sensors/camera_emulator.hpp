@@ -2,7 +2,8 @@
 // jitter, one detection per item in view in camera-local coordinates with position and angle
 // noise, misses, misclassification of hand, side and singulation, confidences, delivery into
 // the input image after the camera's latency, and the injectable faults (dropped frames, NaN
-// fields, stale camera, duplicates, out-of-order timestamps, phantom detections).
+// fields, stale camera, duplicates, out-of-order timestamps, phantom detections, a flooding
+// detection count).
 //
 // The emulator knows nothing of how bodies move: a plant hands it its ground truth through a
 // CameraScene at each of its steps, and it writes InputImage::cameras. Each camera draws from
@@ -61,6 +62,7 @@ struct CameraFaults {
   float out_of_order_prob = 0.0F;  // per frame: exposure time before the previous frame's
   float phantom_prob = 0.0F;       // per frame: a detection where there is no item
   bool stale = false;              // stops delivering: the input keeps its last frame
+  bool flood = false;              // every frame's count claims 255 detections (at most 8 fit)
 };
 using CameraFaultSet = std::array<CameraFaults, kCameraCount>;
 

@@ -1,7 +1,10 @@
 #pragma once
 // Writes MCAP files: messages go into (optionally compressed) chunks, each followed by its
-// message indexes; close() adds the data end, the summary (schemas, channels, statistics,
-// chunk/attachment/metadata indexes), the summary offsets and the footer.
+// message indexes and flushed to the file; close() adds the data end, the summary (schemas,
+// channels, statistics, chunk/attachment/metadata indexes), the summary offsets and the footer.
+// A writer that dies before close() leaves every flushed chunk readable by scan(): it loses at
+// most the open chunk (WriterOptions::chunk_size of records) and what the operating system had
+// not yet written back.
 
 #include <cstdint>
 #include <filesystem>
@@ -40,7 +43,8 @@ class Writer {
  public:
   // Writes into `out`, which must outlive the writer.
   Writer(std::ostream& out, WriterOptions options);
-  // Creates (truncates) the file at `path`; throws std::runtime_error if it cannot.
+  // Creates (truncates) the file at `path`; throws std::runtime_error if it cannot. Every
+  // error of a writer made this way names the file and the system's reason.
   Writer(const std::filesystem::path& path, WriterOptions options);
   Writer(const Writer&) = delete;
   Writer& operator=(const Writer&) = delete;
@@ -62,7 +66,7 @@ class Writer {
   const Statistics& statistics() const { return statistics_; }
 
  private:
-  Writer(std::unique_ptr<std::ofstream> file, WriterOptions options);
+  Writer(std::unique_ptr<std::ofstream> file, WriterOptions options, std::string where);
   void write_start();
   void write_bytes(ByteView bytes);
   void write_record(Opcode opcode, ByteView content);
@@ -72,6 +76,7 @@ class Writer {
   std::unique_ptr<std::ofstream> owned_file_;
   std::ostream& out_;
   WriterOptions options_;
+  std::string where_;  // "mcap: <path>" for a file, "mcap" for a stream: the errors' prefix
   bool closed_ = false;
   std::uint64_t position_ = 0;
   std::uint32_t data_crc_ = 0;  // over every byte before the data end record
