@@ -2,6 +2,7 @@
 //   linectl run --plant fast --duration 10m --seed 1 [--json kpis.json] [--ledger ledger.csv]
 //   linectl run --realtime ...      the same loop on the 10 ms real-time schedule
 //   linectl run --realtime --duration forever   as the service runs: until SIGTERM or SIGINT
+//   linectl vision eval REC...      the estimator's accuracy against the twin's ground truth
 //   linectl soak [--duration 1h]    a long real-time run judged by memory, deadlines, losses
 //   linectl config check [FILE]     validate a line configuration (and --plant's)
 //   linectl record / replay         camera recordings and their regression replay
@@ -39,6 +40,7 @@
 #include "record_replay.hpp"
 #include "soak_command.hpp"
 #include "two_process.hpp"
+#include "vision_eval_command.hpp"
 
 namespace fl::apps {
 namespace {
@@ -213,6 +215,8 @@ int main(int argc, char** argv) {
   CLI::App* diagnose = add_diagnose_subcommand(app, diagnose_args);
   GenerateArgs generate_args;
   CLI::App* dataset = add_dataset_subcommand(app, generate_args);
+  VisionEvalArgs vision_eval_args;
+  CLI::App* vision_eval = add_vision_subcommand(app, vision_eval_args);
   SoakArgs soak_args;
   CLI::App* soak = add_soak_subcommand(app, soak_args);
   HmiToolArgs hmi_args;
@@ -237,6 +241,7 @@ int main(int argc, char** argv) {
     if (dataset->parsed()) return generate_command(generate_args);
     if (hmi->parsed()) return hmi_command(hmi_args);
     if (soak->parsed()) return soak_command(soak_args);
+    if (vision_eval->parsed()) return vision_eval_command(vision_eval_args);
     if (check->parsed()) {
       const std::filesystem::path line_file =
           check_path.empty() ? default_config("line.yaml") : std::filesystem::path(check_path);

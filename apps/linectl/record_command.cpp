@@ -131,8 +131,7 @@ struct CameraRig {
 };
 
 int record_twin(const RecordArgs& args, double duration_s) {
-  const std::filesystem::path config_file =
-      args.config.empty() ? default_config("line.yaml") : std::filesystem::path(args.config);
+  const std::filesystem::path config_file = config_or_default(args.config, "line.yaml");
   const LineConfig line = load_line_config(config_file);
   std::unique_ptr<Plant> plant = make_plant(args.plant, args.plant_config, line);
   auto renderer = std::make_shared<render::FilletRenderer>();
@@ -211,6 +210,7 @@ int record_twin(const RecordArgs& args, double duration_s) {
                        vision::to_string(result.status), result.message);
         }
         writer.write_frame(rig.camera, sequence, in.time_ns, frame.bgr);
+        writer.write_truth(rig.camera, sequence, in.time_ns, rig.source->last_truth());
         rig.in_flight.emplace_back(in.time_ns + latency_ns, result.to_camera_frame());
         rig.next_exposure_ns += rig.period_ns;
       }

@@ -2,9 +2,11 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
@@ -17,8 +19,6 @@
 namespace fl::vision::record {
 namespace {
 
-constexpr std::array<std::string_view, kCameraCount> kCameraNames = {
-    "orientation", "position", "multilane1", "multilane2", "final"};
 constexpr std::int64_t kNsPerS = 1'000'000'000;
 
 // ROS 2's sensor_msgs/msg/CompressedImage with its dependencies, in the concatenated form
@@ -42,6 +42,26 @@ constexpr std::string_view kLineCommandSchema = "fl::LineCommand";
 constexpr std::string_view kLineStatusSchema = "fl::LineStatus";
 constexpr std::string_view kDriveFeedbackSchema = "fl::DriveFeedback";
 constexpr std::string_view kLineSensorsSchema = "fl::LineSensors";
+constexpr std::string_view kCameraTruthSchema = "fl.CameraTruth";
+// JSON Schema of the truth channel's messages, so that Foxglove and other tools show them.
+// clang-format off
+constexpr std::string_view kCameraTruthJsonSchema = R"json({
+  "title": "fl.CameraTruth",
+  "description": "The fillets as they truly lay in one twin camera frame, camera belt frame",
+  "type": "object",
+  "properties": {
+    "camera": {"type": "string"},
+    "sequence": {"type": "integer"},
+    "exposure_ns": {"type": "integer"},
+    "fillets": {"type": "array", "items": {"type": "object", "properties": {
+      "x_mm": {"type": "number"}, "y_mm": {"type": "number"},
+      "angle_rad": {"type": "number", "description": "thick end to tip, from travel, CCW"},
+      "hand": {"enum": ["left", "right"]}, "side": {"enum": ["skin", "bone"]},
+      "group_id": {"type": "integer", "description": "0 or more: fillets sharing it touch"},
+      "singulated": {"type": "boolean"}, "fully_visible": {"type": "boolean"}}}}
+  }
+})json";
+// clang-format on
 
 std::string seconds(std::int64_t ns) {
   char text[48];
@@ -70,20 +90,18 @@ std::string calibration_yaml(const BeltCalibration& calibration) {
 
 }  // namespace
 
-std::string_view camera_name(CameraId camera) { return kCameraNames.at(index(camera)); }
+std::string_view camera_name(CameraId camera) { return to_string(camera); }
 
-std::optional<CameraId> camera_from_name(std::string_view name) {
-  for (std::size_t c = 0; c < kCameraCount; ++c) {
-    if (kCameraNames[c] == name) return static_cast<CameraId>(c);
-  }
-  return std::nullopt;
-}
+std::optional<CameraId> camera_from_name(std::string_view name) { return parse<CameraId>(name); }
 
 std::string image_topic(CameraId camera) {
   return "/camera/" + std::string(camera_name(camera)) + "/image";
 }
 std::string estimates_topic(CameraId camera) {
   return "/camera/" + std::string(camera_name(camera)) + "/estimates";
+}
+std::string truth_topic(CameraId camera) {
+  return "/camera/" + std::string(camera_name(camera)) + "/truth";
 }
 std::string calibration_attachment(CameraId camera) {
   return "camera_" + std::string(camera_name(camera)) + ".yaml";
@@ -119,6 +137,8 @@ std::uint16_t RecordingWriter::schema(std::string_view name) {
   std::uint16_t id = 0;
   if (name == kCompressedImageSchema) {
     id = writer_->add_schema(std::string(name), "ros2msg", view(kCompressedImageMsg));
+  } else if (name == kCameraTruthSchema) {
+    id = writer_->add_schema(std::string(name), "jsonschema", view(kCameraTruthJsonSchema));
   } else {
     id = writer_->add_schema(std::string(name), "omgidl", view(fillet_line_idl()));
   }
@@ -199,6 +219,37 @@ void RecordingWriter::write_estimates(CameraId camera, std::int64_t log_time_ns,
         encode(CameraEstimatesSample{static_cast<std::uint8_t>(c), frame}));
 }
 
+void RecordingWriter::write_truth(CameraId camera, std::uint32_t sequence, std::int64_t exposure_ns,
+                                  const std::vector<TrueFillet>& fillets) {
+  const std::size_t c = index(camera);
+  if (image_channel_.at(c) == 0) {
+    throw std::logic_error("camera " + std::string(camera_name(camera)) +
+                           " records no frames: it has no truth to record");
+  }
+  if (truth_channel_[c] == 0) {
+    truth_channel_[c] = writer_->add_channel(
+        schema(kCameraTruthSchema), truth_topic(camera), "json",
+        {{"camera", std::string(camera_name(camera))}, {"camera_id", std::to_string(c)}});
+  }
+  nlohmann::json list = nlohmann::json::array();
+  for (const TrueFillet& fillet : fillets) {
+    list.push_back({{"x_mm", fillet.x_mm},
+                    {"y_mm", fillet.y_mm},
+                    {"angle_rad", fillet.angle_rad},
+                    {"hand", to_string(fillet.hand)},
+                    {"side", to_string(fillet.side)},
+                    {"group_id", fillet.group_id},
+                    {"singulated", fillet.singulated},
+                    {"fully_visible", fillet.fully_visible}});
+  }
+  const std::string text = nlohmann::json{
+      {"camera", camera_name(camera)},
+      {"sequence", sequence},
+      {"exposure_ns", exposure_ns},
+      {"fillets", list}}.dump();
+  write(truth_channel_[c], sequence, exposure_ns, Bytes(text.begin(), text.end()));
+}
+
 void RecordingWriter::write_scan(std::uint64_t scan, const InputImage& in, const OutputImage& out) {
   const std::uint32_t sequence = scan_sequence_++;
   write(sensors_channel_, sequence, in.time_ns, encode(LineSensorsSample{scan, in}));
@@ -224,7 +275,7 @@ std::uint64_t RecordingWriter::bytes_written() const { return writer_->bytes_wri
 
 namespace {
 
-enum class Kind { kImage, kEstimates, kSensors, kDrive, kCommand, kStatus };
+enum class Kind { kImage, kEstimates, kTruth, kSensors, kDrive, kCommand, kStatus };
 
 struct ChannelInfo {
   Kind kind = Kind::kImage;
@@ -242,6 +293,17 @@ ChannelInfo classify(const mcap::Channel& channel, const mcap::Schema* schema,
   const std::string where =
       file + ": channel '" + channel.topic + "' (id " + std::to_string(channel.id) + ")";
   if (schema == nullptr) throw RecordingError(where + " has no schema");
+  for (std::size_t c = 0; c < kCameraCount; ++c) {
+    const auto camera = static_cast<CameraId>(c);
+    if (channel.topic != truth_topic(camera)) continue;
+    if (channel.message_encoding != "json" || schema->name != kCameraTruthSchema ||
+        schema->encoding != "jsonschema") {
+      throw RecordingError(where + ": encoding '" + channel.message_encoding + "', schema '" +
+                           schema->name + "' (" + schema->encoding + "), expected json, '" +
+                           std::string(kCameraTruthSchema) + "' (jsonschema)");
+    }
+    return {Kind::kTruth, camera, channel.topic};
+  }
   if (channel.message_encoding != "cdr") {
     throw RecordingError(where + ": message encoding '" + channel.message_encoding +
                          "', expected cdr");
@@ -284,6 +346,55 @@ ChannelInfo classify(const mcap::Channel& channel, const mcap::Schema* schema,
                          "); a recording holds only the channels of docs/vision.md");
   }
   return info;
+}
+
+// One truth message; RecordingError naming `where` and the field when it is malformed.
+std::vector<TrueFillet> decode_truth(const Bytes& data, const std::string& where) {
+  const nlohmann::json json = nlohmann::json::parse(data.begin(), data.end(), nullptr, false);
+  if (json.is_discarded() || !json.is_object() || !json.contains("fillets") ||
+      !json["fillets"].is_array()) {
+    throw RecordingError(where + ": not a truth message (a JSON object with a 'fillets' array)");
+  }
+  std::vector<TrueFillet> fillets;
+  for (std::size_t i = 0; i < json["fillets"].size(); ++i) {
+    const nlohmann::json& item = json["fillets"][i];
+    const std::string at = where + ": fillets[" + std::to_string(i) + "]";
+    const auto number = [&](const char* key) {
+      if (!item.is_object() || !item.contains(key) || !item[key].is_number()) {
+        throw RecordingError(at + "." + key + ": missing or not a number");
+      }
+      const double value = item[key].get<double>();
+      if (!std::isfinite(value)) throw RecordingError(at + "." + key + ": not finite");
+      return value;
+    };
+    const auto flag = [&](const char* key) {
+      if (!item.contains(key) || !item[key].is_boolean()) {
+        throw RecordingError(at + "." + key + ": missing or not true/false");
+      }
+      return item[key].get<bool>();
+    };
+    const auto name = [&](const char* key) {
+      if (!item.contains(key) || !item[key].is_string()) {
+        throw RecordingError(at + "." + key + ": missing or not a string");
+      }
+      return item[key].get<std::string>();
+    };
+    TrueFillet fillet;
+    fillet.x_mm = number("x_mm");
+    fillet.y_mm = number("y_mm");
+    fillet.angle_rad = number("angle_rad");
+    const std::optional<Hand> hand = parse<Hand>(name("hand"));
+    const std::optional<SideUp> side = parse<SideUp>(name("side"));
+    if (!hand || *hand == Hand::kUnknown) throw RecordingError(at + ".hand: not left or right");
+    if (!side || *side == SideUp::kUnknown) throw RecordingError(at + ".side: not skin or bone");
+    fillet.hand = *hand;
+    fillet.side = *side;
+    fillet.group_id = static_cast<int>(number("group_id"));
+    fillet.singulated = flag("singulated");
+    fillet.fully_visible = flag("fully_visible");
+    fillets.push_back(fillet);
+  }
+  return fillets;
 }
 
 }  // namespace
@@ -346,7 +457,7 @@ Recording load_recording(const std::filesystem::path& path) {
   }
   for (std::size_t c = 0; c < kCameraCount; ++c) {
     if (recording.cameras[c].has_frames && !recording.cameras[c].calibration) {
-      throw RecordingError(file + ": camera " + std::string(kCameraNames[c]) +
+      throw RecordingError(file + ": camera " + std::string(to_string(static_cast<CameraId>(c))) +
                            " has frames but no attachment " +
                            calibration_attachment(static_cast<CameraId>(c)));
     }
@@ -400,6 +511,14 @@ Recording load_recording(const std::filesystem::path& path) {
           }
           recording.estimates.push_back(
               {channel.camera, log_time_ns, sample.frame, file + ": " + where});
+          break;
+        }
+        case Kind::kTruth: {
+          auto& truth = recording.cameras[index(channel.camera)].truth;
+          if (!truth.emplace(message.sequence, decode_truth(message.data, file + ": " + where))
+                   .second) {
+            throw RecordingError(file + ": " + where + ": truth of a frame recorded twice");
+          }
           break;
         }
         case Kind::kSensors: {

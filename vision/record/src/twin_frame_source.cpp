@@ -31,7 +31,21 @@ std::optional<SourceFrame> TwinFrameSource::next() {
   scene.seed = settings_.seed + sequence_;
   scene.supersampling = settings_.supersampling;
   SourceFrame frame;
-  frame.bgr = renderer_->render(camera_, scene).bgr;
+  render::RenderedFrame rendered = renderer_->render(camera_, scene);
+  frame.bgr = std::move(rendered.bgr);
+  last_truth_.clear();
+  for (const render::FilletTruth& truth : rendered.truth) {
+    TrueFillet fillet;
+    fillet.x_mm = truth.fillet.x_mm;
+    fillet.y_mm = truth.fillet.y_mm;
+    fillet.angle_rad = truth.fillet.angle_rad;
+    fillet.hand = truth.fillet.hand;
+    fillet.side = truth.fillet.side;
+    fillet.group_id = truth.fillet.group_id;
+    fillet.singulated = truth.singulated;
+    fillet.fully_visible = truth.fully_visible;
+    last_truth_.push_back(fillet);
+  }
   frame.time_ns = scene_.time_ns();
   frame.sequence = sequence_++;
   frame.origin = "twin camera " + calibration_.camera_name;

@@ -3,7 +3,7 @@
 // drive feedback) and outputs (command, status), so that `linectl replay` can run the vision
 // and the controller logic again and compare their decisions.
 //
-// Channels (message encoding cdr on every channel):
+// Channels (message encoding cdr unless said otherwise):
 //   /camera/<name>/image      sensor_msgs/msg/CompressedImage (ros2msg), format "png";
 //                             MCAP sequence = the camera's frame sequence, log time = exposure
 //   /camera/<name>/estimates  fl::CameraEstimates (omgidl); log time = the scan at which the
@@ -12,6 +12,9 @@
 //   /line/drive_feedback      fl::DriveFeedback (omgidl), one per drive per scan
 //   /line/command             fl::LineCommand (omgidl), one per scan
 //   /line/status              fl::LineStatus (omgidl), one per scan
+//   /camera/<name>/truth      twin recordings only: the fillets as they truly lay in each
+//                             frame (message encoding json, schema fl.CameraTruth in
+//                             jsonschema); MCAP sequence = the frame's; for linectl vision eval
 // Attachments: camera_<name>.yaml (the camera's belt calibration, as config/), line.yaml (the
 // line configuration the controller ran with). Metadata "fl_recording": what made it.
 #pragma once
@@ -29,6 +32,7 @@
 #include <vector>
 
 #include "fl/controller/process_image.hpp"
+#include "fl/vision/accuracy.hpp"
 #include "fl/vision/calibration.hpp"
 #include "fl/vision/record/cdr.hpp"
 
@@ -51,6 +55,7 @@ std::string_view camera_name(CameraId camera);
 std::optional<CameraId> camera_from_name(std::string_view name);
 std::string image_topic(CameraId camera);
 std::string estimates_topic(CameraId camera);
+std::string truth_topic(CameraId camera);
 std::string calibration_attachment(CameraId camera);
 
 // The schema texts written into recordings. fillet_line.idl holds every omgidl type of a
@@ -86,6 +91,9 @@ class RecordingWriter {
   void write_frame(CameraId camera, std::uint32_t sequence, std::int64_t exposure_ns,
                    const cv::Mat& image);
   void write_estimates(CameraId camera, std::int64_t log_time_ns, const CameraFrame& frame);
+  // The twin's ground truth of a frame written with write_frame (same sequence and time).
+  void write_truth(CameraId camera, std::uint32_t sequence, std::int64_t exposure_ns,
+                   const std::vector<TrueFillet>& fillets);
   // The scan's input image (sensors and drives; cameras go through write_estimates) and the
   // controller's output image.
   void write_scan(std::uint64_t scan, const InputImage& in, const OutputImage& out);
@@ -105,6 +113,7 @@ class RecordingWriter {
   std::map<std::string, std::uint16_t, std::less<>> schemas_;
   std::array<std::uint16_t, kCameraCount> image_channel_{};
   std::array<std::uint16_t, kCameraCount> estimates_channel_{};
+  std::array<std::uint16_t, kCameraCount> truth_channel_{};  // 0 until the first truth
   std::array<std::uint32_t, kCameraCount> estimates_sequence_{};
   std::uint16_t sensors_channel_ = 0;
   std::uint16_t drive_channel_ = 0;
@@ -143,6 +152,7 @@ struct RecordedCamera {
   bool has_frames = false;
   std::optional<BeltCalibration> calibration;     // from the attachment, when it has frames
   std::map<std::uint32_t, RecordedFrame> frames;  // by sequence
+  std::map<std::uint32_t, std::vector<TrueFillet>> truth;  // by frame sequence (twin only)
 };
 
 struct Recording {

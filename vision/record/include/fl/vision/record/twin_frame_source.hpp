@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "fl/twin/render/fillet_renderer.hpp"
+#include "fl/vision/accuracy.hpp"
 #include "fl/vision/calibration.hpp"
 #include "fl/vision/record/frame_source.hpp"
 
@@ -47,6 +48,8 @@ class TwinFrameSource final : public FrameSource {
   [[nodiscard]] std::string describe() const override;
   [[nodiscard]] const BeltCalibration& calibration() const { return calibration_; }
   [[nodiscard]] const render::RenderCamera& camera() const { return camera_; }
+  // The fillets of the frame next() returned last, as they truly lay (camera belt frame).
+  [[nodiscard]] const std::vector<TrueFillet>& last_truth() const { return last_truth_; }
 
  private:
   std::shared_ptr<const render::FilletRenderer> renderer_;
@@ -55,6 +58,7 @@ class TwinFrameSource final : public FrameSource {
   render::RenderCamera camera_;
   BeltCalibration calibration_;
   std::uint32_t sequence_ = 0;
+  std::vector<TrueFillet> last_truth_;
 };
 
 }  // namespace fl::vision::record

@@ -1,0 +1,101 @@
+// The estimator's accuracy against ground truth (issue 4 item 5, `linectl vision eval`): each
+// frame's blobs are matched with the true fillets in view, and a tally collects the angle and
+// position errors, the left/right and side-up confusion matrices, and how well touching
+// fillets are told apart from single ones (singulation precision and recall, "touching" being
+// the positive class: it is what must never be placed).
+//
+// Matching rules, per frame:
+//  - a single fillet (no other touches it) wholly in view is matched with the nearest fillet
+//    blob within `match_gate_mm` of its pose; no blob there: missed;
+//  - a touching group wholly in view counts once; it is flagged when at least one fillet blob lies
+//  within
+//    `group_gate_mm` of a member and every such blob says "not singulated";
+//  - a fillet blob with no true fillet (in view or not) within `group_gate_mm`: a phantom.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "fl/controller/process_image.hpp"
+#include "fl/vision/fillet_estimator.hpp"
+
+namespace fl::vision {
+
+// A fillet as it truly lies in a frame, in the camera's belt frame (the estimates' frame).
+struct TrueFillet {
+  double x_mm = 0.0;
+  double y_mm = 0.0;
+  double angle_rad = 0.0;  // thick end to tip, counter-clockwise from travel
+  Hand hand = Hand::kUnknown;
+  SideUp side = SideUp::kUnknown;
+  int group_id = -1;          // >= 0: the fillets sharing it touch
+  bool singulated = true;     // no other fillet shares its group
+  bool fully_visible = true;  // the whole silhouette is inside the image
+};
+
+struct AccuracyOptions {
+  // The estimate's position is the blob's centroid, a few mm from the pose; 30 mm is a sixth
+  // of the shortest fillet (144 mm), so a neighbour is never taken for it.
+  double match_gate_mm = 30.0;
+  // A touching group's blob centre can lie half a fillet length from any member's pose.
+  double group_gate_mm = 100.0;
+};
+
+// Confusion matrix: rows the truth (left/right or skin/bone), columns the estimate
+// (the two classes, then unknown).
+using Confusion = std::array<std::array<std::uint64_t, 3>, 2>;
+
+struct AccuracySummary {
+  std::uint64_t frames = 0;
+  std::uint64_t frames_not_ok = 0;  // the estimator refused the frame (status other than kOk)
+  std::uint64_t singles = 0;        // single fillets wholly in view
+  std::uint64_t detected = 0;       // of them, matched with a blob
+  std::uint64_t phantoms = 0;
+  // Over the detected singles.
+  double angle_error_p50_deg = 0.0;
+  double angle_error_p95_deg = 0.0;
+  double angle_error_max_deg = 0.0;
+  double position_error_p50_mm = 0.0;
+  double position_error_p95_mm = 0.0;
+  double position_error_max_mm = 0.0;
+  std::uint64_t thick_end_right = 0;  // angle error under 90 degrees
+  Confusion hand{};
+  Confusion side{};
+  double hand_correct_share = 0.0;  // of detected singles
+  double side_correct_share = 0.0;
+  // Singulation, "touching" positive.
+  std::uint64_t groups = 0;           // touching groups in view
+  std::uint64_t groups_flagged = 0;   // true positives
+  std::uint64_t singles_flagged = 0;  // false positives: a single called touching
+  double singulation_precision = 1.0;
+  double singulation_recall = 1.0;
+};
+
+class AccuracyTally {
+ public:
+  explicit AccuracyTally(AccuracyOptions options = {}) : options_(options) {}
+
+  void add_frame(const FrameResult& result, const std::vector<TrueFillet>& truth);
+  [[nodiscard]] AccuracySummary summary() const;
+
+  // Every detected single's errors, in the order they were added (for plots).
+  [[nodiscard]] const std::vector<double>& angle_errors_deg() const { return angle_errors_deg_; }
+  [[nodiscard]] const std::vector<double>& position_errors_mm() const {
+    return position_errors_mm_;
+  }
+
+ private:
+  AccuracyOptions options_;
+  AccuracySummary counts_;
+  std::vector<double> angle_errors_deg_;
+  std::vector<double> position_errors_mm_;
+};
+
+// The smallest angle between two directions, in [0, pi].
+double angle_between_rad(double a_rad, double b_rad);
+
+// Nearest-rank percentile of `values` (share in [0, 1]); 0 for none.
+double percentile(std::vector<double> values, double share);
+
+}  // namespace fl::vision
