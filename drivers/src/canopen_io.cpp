@@ -330,8 +330,11 @@ void CanopenIo::fill_image(InputImage& in) const {
     feedback.encoder_counts = drive.encoder_counts;  // held while lost: no travel invented
   }
 
+  // A module with an active emergency (EMCY error code not yet reset to 0) may report inputs
+  // it cannot vouch for: it is read like a lost one, safe values and the chain open.
   const auto module_ok = [this](IoModuleId id) {
-    return node_healthy(kDriveCount + index(id)) && io_[index(id)].received;
+    const std::size_t slot = kDriveCount + index(id);
+    return node_healthy(slot) && io_[index(id)].received && nodes_[slot].emcy_code == 0;
   };
   const IoScaling& scaling = config_.io_scaling;
   const bool infeed_ok = module_ok(IoModuleId::kInfeed);

@@ -71,6 +71,34 @@ TEST(CanopenLine, EmergencyStopsTheLineInTheScanThatReadsIt) {
   }
 }
 
+// An I/O module's emergency (here the stations module, whose inputs are the plates' and the
+// roller's end switches): its inputs cannot be trusted, so the chain reads open in the read
+// that receives it and every drive is disabled in that scan; the error reset (EMCY code 0)
+// closes the chain again in the next read.
+TEST(CanopenLine, IoModuleEmergencyOpensTheChainUntilItIsReset) {
+  LineOnCan line;
+  line.start_line();
+  const std::uint8_t stations = line.rig.config.io_modules[index(IoModuleId::kStations)].node_id;
+  canopen::Emergency emergency;
+  emergency.error_code = 0x5000;  // device hardware
+  emergency.error_register = 0x01;
+  line.rig.master_bus.inject(canopen::make_emcy(stations, emergency));
+  line.rig.in.time_ns = line.rig.now_ns;
+  line.rig.io.read(line.rig.now_ns, line.rig.in);
+  EXPECT_FALSE(line.rig.in.estop_ok);  // the same read
+  line.controller.update(line.rig.in, line.out);
+  EXPECT_EQ(line.out.state, LineState::kFault);
+  for (const DriveCommand& drive : line.out.drives) EXPECT_FALSE(drive.enable);
+  line.rig.io.write(line.out);
+  line.rig.advance(LoopbackRig::kCycleNs);
+
+  canopen::Emergency reset;  // error code 0: the module's errors are gone
+  line.rig.master_bus.inject(canopen::make_emcy(stations, reset));
+  line.rig.in.time_ns = line.rig.now_ns;
+  line.rig.io.read(line.rig.now_ns, line.rig.in);
+  EXPECT_TRUE(line.rig.in.estop_ok);
+}
+
 // The same from the emulated drive itself: it trips, reports its fault (EMCY and statusword)
 // with the SYNC that ends the next write, and the controller stops the line in the first scan
 // whose read sees it: at most two scans after the trip.
