@@ -1,14 +1,18 @@
 #include "fl/vision/record/replay.hpp"
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <limits>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 #include <utility>
 
 #include "fl/controller/config_loader.hpp"
@@ -154,15 +158,105 @@ double header_time(const std::string& header) {
 
 }  // namespace
 
+namespace {
+
+// The recorded frames the replay measures, in the order the controller receives them, measured
+// ahead in parallel batches: decoding a PNG and estimating take most of a replay's time, and
+// each frame's result depends on that frame alone (the estimator keeps only scratch buffers),
+// so the replay is the same with any number of threads.
+class FrameMeasurer {
+ public:
+  struct Job {
+    std::size_t camera = 0;
+    const RecordedFrame* frame = nullptr;  // nullptr: `error` says why
+    std::string error;
+  };
+
+  FrameMeasurer(const Recording& recording, const EstimatorParams& params, std::vector<Job> jobs,
+                unsigned threads)
+      : jobs_(std::move(jobs)),
+        threads_(threads == 0 ? std::max(1U, std::thread::hardware_concurrency()) : threads),
+        estimators_(threads_) {
+    for (auto& per_thread : estimators_) {
+      for (std::size_t c = 0; c < kCameraCount; ++c) {
+        if (recording.cameras[c].has_frames) {
+          per_thread[c].emplace(*recording.cameras[c].calibration, params);
+        }
+      }
+    }
+  }
+
+  // Job i's result; jobs are taken in order. Rethrows the job's error.
+  const FrameResult& get(std::size_t i) {
+    if (i >= batch_end_) measure_batch(i);
+    const std::size_t slot = i - batch_start_;
+    if (errors_[slot]) std::rethrow_exception(errors_[slot]);
+    return results_[slot];
+  }
+
+ private:
+  // Frames per thread per batch: enough to keep the threads busy, few enough to bound memory.
+  static constexpr std::size_t kFramesPerThread = 16;
+
+  void measure_batch(std::size_t first) {
+    batch_start_ = first;
+    batch_end_ = std::min(jobs_.size(), first + kFramesPerThread * threads_);
+    const std::size_t count = batch_end_ - batch_start_;
+    results_.assign(count, FrameResult{});
+    errors_.assign(count, nullptr);
+    const auto work = [&](std::size_t worker) {
+      for (std::size_t slot = worker; slot < count; slot += threads_) {
+        const Job& job = jobs_[batch_start_ + slot];
+        try {
+          if (job.frame == nullptr) throw RecordingError(job.error);
+          const cv::Mat bgr = decode_frame(*job.frame);
+          results_[slot] = estimators_[worker][job.camera]->estimate(bgr, job.frame->exposure_ns,
+                                                                     job.frame->sequence);
+        } catch (...) {
+          errors_[slot] = std::current_exception();
+        }
+      }
+    };
+    std::vector<std::thread> workers;
+    for (std::size_t worker = 1; worker < threads_ && worker < count; ++worker) {
+      workers.emplace_back(work, worker);
+    }
+    work(0);
+    for (std::thread& worker : workers) worker.join();
+  }
+
+  std::vector<Job> jobs_;
+  std::size_t threads_;
+  std::vector<std::array<std::optional<FilletEstimator>, kCameraCount>> estimators_;
+  std::size_t batch_start_ = 0;
+  std::size_t batch_end_ = 0;
+  std::vector<FrameResult> results_;
+  std::vector<std::exception_ptr> errors_;
+};
+
+}  // namespace
+
 ReplayResult replay(const Recording& recording, const ReplayOptions& options) {
   const std::string file = recording.path.string();
   ReplayResult result;
-  std::array<std::optional<FilletEstimator>, kCameraCount> estimators;
-  for (std::size_t c = 0; c < kCameraCount; ++c) {
-    if (recording.cameras[c].has_frames) {
-      estimators[c].emplace(*recording.cameras[c].calibration, options.estimator);
+  std::vector<FrameMeasurer::Job> jobs;
+  for (const RecordedEstimates& recorded : recording.estimates) {
+    const std::size_t c = index(recorded.camera);
+    if (!recording.cameras[c].has_frames) continue;
+    const auto& frames = recording.cameras[c].frames;
+    const auto frame = frames.find(recorded.frame.sequence);
+    FrameMeasurer::Job job;
+    job.camera = c;
+    if (frame == frames.end()) {
+      job.error = recorded.where + ": names frame " + std::to_string(recorded.frame.sequence) +
+                  " but " + image_topic(recorded.camera) + " has no frame with that sequence";
+    } else {
+      job.frame = &frame->second;
     }
+    jobs.push_back(std::move(job));
   }
+  FrameMeasurer measurer(recording, options.estimator, std::move(jobs), options.measure_threads);
+  std::size_t next_job = 0;
   std::optional<LineController> controller;
   if (!recording.scans.empty()) {
     LineConfig config;
@@ -187,23 +281,14 @@ ReplayResult replay(const Recording& recording, const ReplayOptions& options) {
            recording.estimates[next_estimates].log_time_ns <= time_ns) {
       const RecordedEstimates& recorded = recording.estimates[next_estimates++];
       const std::size_t c = index(recorded.camera);
-      if (!estimators[c]) {
+      if (!recording.cameras[c].has_frames) {
         current[c] = recorded.frame;
         continue;
       }
-      const auto& frames = recording.cameras[c].frames;
-      const auto frame = frames.find(recorded.frame.sequence);
-      if (frame == frames.end()) {
-        throw RecordingError(recorded.where + ": names frame " +
-                             std::to_string(recorded.frame.sequence) + " but " +
-                             image_topic(recorded.camera) + " has no frame with that sequence");
-      }
-      const cv::Mat bgr = decode_frame(frame->second);
-      const FrameResult measured =
-          estimators[c]->estimate(bgr, frame->second.exposure_ns, frame->second.sequence);
+      const FrameResult& measured = measurer.get(next_job++);
       current[c] = measured.to_camera_frame();
       if (!same_frame(current[c], recorded.frame)) ++result.frames_differing_from_recording;
-      result.entries.push_back(frame_entry(recorded.camera, frame->second.exposure_ns, measured));
+      result.entries.push_back(frame_entry(recorded.camera, measured.frame_time_ns, measured));
       ++result.frames;
     }
   };

@@ -79,6 +79,23 @@ TEST(Replay, VisionOnlyRecordingReplaysEveryFrameAsRecorded) {
   std::filesystem::remove(path);
 }
 
+// Frames are measured ahead on several threads in batches (16 frames per thread): the
+// checked-in line recording (hundreds of frames, many batches) replays to the same entries
+// on 1 and on 3 threads, 3 being more than this machine's cores so that threads interleave.
+TEST(Replay, ResultDoesNotDependOnTheMeasuringThreads) {
+  const Recording recording = load_recording(std::filesystem::path(FL_SOURCE_DIR) /
+                                             "vision/record/testdata/fast_seed1_orientation.mcap");
+  ReplayOptions one_thread;
+  one_thread.measure_threads = 1;
+  ReplayOptions three_threads;
+  three_threads.measure_threads = 3;
+  const ReplayResult sequential = replay(recording, one_thread);
+  const ReplayResult parallel = replay(recording, three_threads);
+  EXPECT_GT(sequential.frames, 3U * 16U);  // more than one batch of the 3 threads
+  EXPECT_EQ(parallel.frames, sequential.frames);
+  EXPECT_EQ(parallel.entries, sequential.entries);
+}
+
 TEST(Golden, DifferencesAreListedInTimeOrder) {
   const std::vector<GoldenEntry> expected = {
       {"frame orientation 1 t=0.000000000", {"status ok"}},

@@ -38,6 +38,9 @@ struct ReplayOptions {
   // The line configuration the controller runs with; empty: the recording's own (line.yaml
   // attachment).
   std::optional<LineConfig> line_config;
+  // Threads that decode and measure frames ahead of the controller; 0: one per core. The
+  // result does not depend on it.
+  unsigned measure_threads = 0;
 };
 
 struct ReplayResult {
