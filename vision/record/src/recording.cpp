@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -389,7 +390,13 @@ std::vector<TrueFillet> decode_truth(const Bytes& data, const std::string& where
     if (!side || *side == SideUp::kUnknown) throw RecordingError(at + ".side: not skin or bone");
     fillet.hand = *hand;
     fillet.side = *side;
-    fillet.group_id = static_cast<int>(number("group_id"));
+    // A whole number in int's range: casting any other double to int is undefined.
+    const double group_id = number("group_id");
+    if (group_id != std::floor(group_id) || group_id < -1.0 ||
+        group_id > static_cast<double>(std::numeric_limits<int>::max())) {
+      throw RecordingError(at + ".group_id: not -1 or a whole number >= 0");
+    }
+    fillet.group_id = static_cast<int>(group_id);
     fillet.singulated = flag("singulated");
     fillet.fully_visible = flag("fully_visible");
     fillets.push_back(fillet);
