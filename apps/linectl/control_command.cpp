@@ -20,6 +20,7 @@
 #include "fl/drivers/dds/line_io.hpp"
 #include "fl/drivers/dds/line_output.hpp"
 #include "fl/drivers/dds/process_io.hpp"
+#include "realtime_run.hpp"
 #include "two_process.hpp"
 
 namespace fl::apps {
@@ -79,6 +80,7 @@ CLI::App* add_control_subcommand(CLI::App& app, ControlArgs& args) {
   control->add_option("--fifo", args.fifo_priority, "SCHED_FIFO priority of the scan (1-99)")
       ->check(CLI::Range(0, 99));
   control->add_flag("--mlock", args.lock_memory, "lock memory (mlockall)");
+  add_cpu_dma_latency_option(*control, args.cpu_dma_latency_us);
   return control;
 }
 
@@ -101,6 +103,7 @@ int control_command(const ControlArgs& args) {
   RuntimeOptions options;
   options.fifo_priority = args.fifo_priority;
   options.lock_memory = args.lock_memory;
+  options.cpu_dma_latency_us = args.cpu_dma_latency_us;
   options.on_fault = [](RuntimeFault fault) {
     spdlog::error("runtime fault: {}", to_string(fault));
   };

@@ -56,6 +56,7 @@ struct RunArgs {
   bool realtime = false;
   int fifo_priority = 0;
   bool lock_memory = false;
+  int cpu_dma_latency_us = -1;
   bool quiet = false;
   std::string vtk_directory;  // --plant dem: ParaView series
   std::string video_file;     // --plant dem: top and side view video
@@ -97,6 +98,7 @@ int run_command(const RunArgs& args) {
     options.seed = args.seed;
     options.fifo_priority = args.fifo_priority;
     options.lock_memory = args.lock_memory;
+    options.cpu_dma_latency_us = args.cpu_dma_latency_us;
     options.hmi_config = args.hmi_config;
     kpis = run_realtime(options, line, *plant, progress, ledger).kpis;
   } else {
@@ -175,6 +177,7 @@ int main(int argc, char** argv) {
   run->add_option("--fifo", run_args.fifo_priority, "SCHED_FIFO priority for --realtime (1-99)")
       ->check(CLI::Range(0, 99));
   run->add_flag("--mlock", run_args.lock_memory, "lock memory for --realtime (mlockall)");
+  add_cpu_dma_latency_option(*run, run_args.cpu_dma_latency_us);
   run->add_flag("--quiet", run_args.quiet, "no progress display");
   run->add_option("--vtk", run_args.vtk_directory,
                   "--plant dem: write a ParaView series (particles, walls) to this folder");

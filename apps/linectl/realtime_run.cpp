@@ -52,6 +52,14 @@ void Progress::finish() {
   if (!quiet_ && tty_) std::fprintf(stderr, "\n");
 }
 
+void add_cpu_dma_latency_option(CLI::App& command, int& latency_us) {
+  command
+      .add_option("--cpu-dma-latency", latency_us,
+                  "hold /dev/cpu_dma_latency at this many us while the scan runs (0: idle CPUs "
+                  "stay out of deep sleep states; -1: leave it alone); needs write access to it")
+      ->check(CLI::Range(-1, 100000));
+}
+
 void log_event(const Event& event) {
   switch (event.code) {
     case EventCode::kItemCreated:
@@ -92,6 +100,7 @@ RealtimeRunResult run_realtime(const RealtimeRunOptions& options, const LineConf
   RuntimeOptions runtime_options;
   runtime_options.fifo_priority = options.fifo_priority;
   runtime_options.lock_memory = options.lock_memory;
+  runtime_options.cpu_dma_latency_us = options.cpu_dma_latency_us;
   runtime_options.on_fault = [](RuntimeFault fault) {
     spdlog::error("runtime fault: {}", to_string(fault));
   };
@@ -150,13 +159,13 @@ RealtimeRunResult run_realtime(const RealtimeRunOptions& options, const LineConf
   drain();
   result.kpis.plant = plant.name();
   result.kpis.seed = options.seed;
-  result.kpis.compute = runtime.stats().summary().compute;
+  result.cycle_stats = runtime.stats();
+  const CycleStatsSummary stats = result.cycle_stats.summary();
+  result.kpis.compute = stats.compute;
   collector.finish(controller, io.fillets_fed(), io.fillets_on_line(), fed_s, elapsed_s, elapsed_s,
                    result.kpis);
-  result.cycle_stats = runtime.stats();
   result.fed_s = fed_s;
   result.elapsed_s = elapsed_s;
-  const CycleStatsSummary stats = result.cycle_stats.summary();
   spdlog::info("real-time scans {}, overruns {}, wake-up latency p99.9 {:.1f} us max {:.1f} us",
                stats.scans, stats.overruns, static_cast<double>(stats.wakeup_latency.p999_ns) / 1e3,
                static_cast<double>(stats.wakeup_latency.max_ns) / 1e3);

@@ -3,6 +3,7 @@
 // drains the belts before the run ends, progress on stderr and the event log.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <atomic>
 #include <functional>
 #include <string>
@@ -36,6 +37,9 @@ class Progress {
   int last_decile_ = -1;
 };
 
+// --cpu-dma-latency US: the PM QoS request the scan's commands share (-1, the default, off).
+void add_cpu_dma_latency_option(CLI::App& command, int& latency_us);
+
 // Logs a controller event at the level its kind deserves (faults warn, items debug).
 void log_event(const Event& event);
 
@@ -44,6 +48,9 @@ struct RealtimeRunOptions {
   std::uint64_t seed = 1;
   int fifo_priority = 0;
   bool lock_memory = false;
+  // >= 0: hold /dev/cpu_dma_latency at this many us during the run, so that idle CPUs stay
+  // out of deep C-states whose exit would delay the scan's wake-up. -1: leave it alone.
+  int cpu_dma_latency_us = -1;
   std::string hmi_config;  // empty: no HMI
   // Called from the run's own (non-real-time) thread every 50 ms while the loop runs.
   std::function<void(double elapsed_s, const PlantIo& io)> on_tick;

@@ -175,8 +175,9 @@ void write_html(const SoakRun& run, const SoakCriteria& criteria, const SoakVerd
       fmt::format("{:.0f} s fed of {:.0f} s planned, {:.0f} s with the drain", run.fed_s,
                   run.planned_s, run.elapsed_s),
       "");
-  row("SCHED_FIFO / mlockall",
-      fmt::format("{} / {}", run.fifo_applied ? "yes" : "no", run.memory_locked ? "yes" : "no"),
+  row("SCHED_FIFO / mlockall / cpu_dma_latency",
+      fmt::format("{} / {} / {}", run.fifo_applied ? "yes" : "no", run.memory_locked ? "yes" : "no",
+                  run.dma_latency_held ? "held" : "not held"),
       criteria.require_fifo ? "SCHED_FIFO required" : "");
   row("resident growth after warm-up", fmt::format("{} KiB", verdict.resident_growth_kib),
       fmt::format("&lt; {} KiB after {:.0f} s", criteria.max_resident_growth_kib,
@@ -225,6 +226,7 @@ CLI::App* add_soak_subcommand(CLI::App& app, SoakArgs& args) {
   soak->add_flag("--allow-no-fifo", args.allow_no_fifo,
                  "judge the run even when SCHED_FIFO cannot be applied (e.g. no CAP_SYS_NICE)");
   soak->add_flag("!--no-mlock", args.lock_memory, "do not lock memory (mlockall)");
+  add_cpu_dma_latency_option(*soak, args.cpu_dma_latency_us);
   soak->add_option("--warm-up", args.warm_up, "time before memory is judged (default 5m)");
   soak->add_option("--sample-every", args.sample_every, "timeline interval (default 10s)");
   soak->add_option("--max-growth-kib", args.max_resident_growth_kib,
@@ -278,6 +280,7 @@ int soak_command(const SoakArgs& args) {
   options.seed = args.seed;
   options.fifo_priority = args.fifo_priority;
   options.lock_memory = args.lock_memory;
+  options.cpu_dma_latency_us = args.cpu_dma_latency_us;
   options.status = &status;
   options.on_tick = [&](double elapsed_s, const PlantIo& io) { sampler.on_tick(elapsed_s, io); };
   Progress progress(args.quiet);
@@ -292,6 +295,7 @@ int soak_command(const SoakArgs& args) {
   run.stopped_by_signal = result.stopped_by_signal;
   run.fifo_applied = result.setup.fifo_applied;
   run.memory_locked = result.setup.memory_locked;
+  run.dma_latency_held = result.setup.dma_latency_applied;
   run.timeline = std::move(sampler.timeline());
   run.cycle = result.cycle_stats.summary();
   run.scans_at_or_beyond_bound =

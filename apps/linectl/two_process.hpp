@@ -36,6 +36,7 @@ struct ControlArgs {
   std::string drain = "60s";  // longest wait for the line to stop after the stop request
   int fifo_priority = 0;
   bool lock_memory = false;
+  int cpu_dma_latency_us = -1;
 };
 
 CLI::App* add_twin_subcommand(CLI::App& app, TwinServeArgs& args);

@@ -44,6 +44,7 @@ struct SoakRun {
   bool stopped_by_signal = false;
   bool fifo_applied = false;
   bool memory_locked = false;
+  bool dma_latency_held = false;  // /dev/cpu_dma_latency held for the whole run
   std::vector<SoakSample> timeline;
   CycleStatsSummary cycle;
   std::uint64_t scans_at_or_beyond_bound = 0;  // from the whole run's wake-up histogram
