@@ -1,5 +1,8 @@
 #include "fl/mcap/writer.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
@@ -36,14 +39,32 @@ Writer::Writer(std::ostream& out, WriterOptions options)
 }
 
 Writer::Writer(const std::filesystem::path& path, WriterOptions options)
-    : Writer(open_for_writing(path), std::move(options), "mcap: " + path.string()) {}
+    : Writer(open_for_writing(path), std::move(options), path) {}
 
-Writer::Writer(std::unique_ptr<std::ofstream> file, WriterOptions options, std::string where)
+Writer::Writer(std::unique_ptr<std::ofstream> file, WriterOptions options,
+               const std::filesystem::path& path)
     : owned_file_(std::move(file)),
       out_(*owned_file_),
       options_(std::move(options)),
-      where_(std::move(where)) {
+      where_("mcap: " + path.string()) {
+  if (options_.sync_chunks) {
+    // fdatasync works on the file, whichever descriptor wrote it; the stream keeps its own.
+    errno = 0;
+    sync_fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (sync_fd_ < 0) {
+      throw std::runtime_error(where_ + ": cannot open it for fdatasync" + system_reason());
+    }
+  }
   write_start();
+}
+
+void Writer::sync_to_disk() {
+  if (sync_fd_ < 0) return;
+  errno = 0;
+  if (::fdatasync(sync_fd_) != 0) {
+    throw std::runtime_error(where_ + ": fdatasync failed at byte " + std::to_string(position_) +
+                             system_reason());
+  }
 }
 
 void Writer::write_start() {
@@ -59,6 +80,7 @@ Writer::~Writer() {
     close();
   } catch (...) {  // NOLINT(bugprone-empty-catch): destructors must not throw
   }
+  if (sync_fd_ >= 0) ::close(sync_fd_);  // close() threw before it got there
 }
 
 void Writer::write_bytes(ByteView bytes) {
@@ -207,6 +229,7 @@ void Writer::flush_chunk() {
   if (!out_)
     throw std::runtime_error(where_ + ": flush failed at byte " + std::to_string(position_) +
                              system_reason());
+  sync_to_disk();
 
   chunk_records_.clear();
   chunk_message_index_.clear();
@@ -266,6 +289,11 @@ void Writer::close() {
   errno = 0;
   out_.flush();
   if (!out_) throw std::runtime_error(where_ + ": flush failed" + system_reason());
+  sync_to_disk();
+  if (sync_fd_ >= 0) {
+    ::close(sync_fd_);
+    sync_fd_ = -1;
+  }
   if (owned_file_) {
     owned_file_->close();
     if (!*owned_file_)

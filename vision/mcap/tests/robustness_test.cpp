@@ -141,10 +141,15 @@ TEST_P(Truncation, EveryCutKeepsEveryChunkThatEndedBeforeIt) {
 // The writer on a real file, read back from the disk after every message as a crash at that
 // moment would leave it: every closed chunk is there, so the loss never exceeds the open chunk
 // (the writer flushes each chunk instead of leaving its tail in the stream's buffer).
-TEST(PowerLoss, RecorderThatDiesLosesAtMostTheOpenChunk) {
-  const std::filesystem::path path = std::filesystem::temp_directory_path() /
-                                     ("fl_mcap_power_loss_" + std::to_string(::getpid()) + ".mcap");
+// Run with and without sync_chunks: fdatasync must not change what the file holds.
+class PowerLoss : public ::testing::TestWithParam<bool> {};
+
+TEST_P(PowerLoss, RecorderThatDiesLosesAtMostTheOpenChunk) {
+  const std::filesystem::path path =
+      std::filesystem::temp_directory_path() /
+      ("fl_mcap_power_loss_" + std::to_string(::getpid()) + (GetParam() ? "_sync" : "") + ".mcap");
   WriterOptions options;
+  options.sync_chunks = GetParam();
   options.chunk_size = 4 * 1024;  // 1.5 KB frames: a chunk closes every 3 frames
   constexpr std::size_t kFrameBytes = 1500;
   constexpr int kFrames = 40;
@@ -170,6 +175,37 @@ TEST(PowerLoss, RecorderThatDiesLosesAtMostTheOpenChunk) {
   EXPECT_TRUE(closed.complete) << closed.stop_reason;
   EXPECT_EQ(closed.messages.size(), static_cast<std::size_t>(kFrames));
   std::filesystem::remove(path);
+}
+
+INSTANTIATE_TEST_SUITE_P(SyncChunks, PowerLoss, ::testing::Bool(), [](const auto& param_info) {
+  return param_info.param ? "Synced" : "Flushed";
+});
+
+// sync_chunks really syncs at each closed chunk: /dev/null takes the writes but refuses
+// fdatasync (EINVAL), and that refusal surfaces at the first chunk with the file's name.
+TEST(SyncChunks, FdatasyncFailureNamesTheFileAtTheFirstChunk) {
+  const std::filesystem::path null_device("/dev/null");
+  if (!std::filesystem::exists(null_device)) GTEST_SKIP() << "no /dev/null here";
+  WriterOptions options;
+  options.chunk_size = 4 * 1024;  // 1.5 KB frames: the third frame closes the first chunk
+  options.sync_chunks = true;
+  Writer writer(null_device, options);
+  const std::uint16_t channel = writer.add_channel(0, "/camera", "raw");
+  std::string error;
+  int frames_written = 0;
+  try {
+    for (; frames_written < 10; ++frames_written) {
+      const Bytes data = frame_payload(frames_written, 1500);
+      writer.write_message({channel, static_cast<std::uint32_t>(frames_written),
+                            frame_time(frames_written), frame_time(frames_written), data});
+    }
+  } catch (const std::runtime_error& caught) {
+    error = caught.what();
+  }
+  EXPECT_EQ(frames_written, 2) << "the frame that closes the first chunk (the third) fails";
+  EXPECT_NE(error.find("/dev/null"), std::string::npos) << error;
+  EXPECT_NE(error.find("fdatasync failed"), std::string::npos) << error;
+  EXPECT_NE(error.find("Invalid argument"), std::string::npos) << error;
 }
 
 // A full device: the error names the file and the system's reason, at the latest when the
