@@ -115,6 +115,12 @@ TEST(TwoProcessDds, ControlAndTwinOverLoopbackMatchTheInProcessRun) {
   EXPECT_EQ(control_kpis["ledger"]["records_dropped"].get<int>(), 0);
   EXPECT_EQ(control_kpis["runtime"]["fault"].get<std::string>(), "none");
   EXPECT_EQ(twin_kpis["truth"]["outfeed_not_singulated"].get<int>(), 0);
+  // The telemetry topics went out beside it: every closed record on fl/line/ledger, and the
+  // KPIs once a second of the 60 s fed (the first at the first scan).
+  EXPECT_EQ(control_kpis["dds"]["ledger_records_published"].get<int>(),
+            control_kpis["ledger"]["items_closed"].get<int>());
+  EXPECT_GE(control_kpis["dds"]["kpis_published"].get<int>(), 60);
+  EXPECT_EQ(control_kpis["dds"]["telemetry_write_failures"].get<int>(), 0);
 
   // The KPIs of the lock-step run with the same seed.
   const double in_spec = twin_kpis["in_spec_share_of_singulated"].get<double>();

@@ -20,6 +20,7 @@
 #include "fl/drivers/dds/line_io.hpp"
 #include "fl/drivers/dds/line_output.hpp"
 #include "fl/drivers/dds/process_io.hpp"
+#include "fl/drivers/dds/telemetry.hpp"
 #include "realtime_run.hpp"
 #include "two_process.hpp"
 
@@ -100,6 +101,11 @@ int control_command(const ControlArgs& args) {
 
   LineController controller(line);
   LineControllerLogic logic(controller);
+  // Telemetry for the plant beyond the HMI (MES, dashboards): the ledger, the KPIs and the
+  // scan timing on their DDS topics, published from this thread as the ledger drains.
+  LineStatusPublisher status;
+  logic.attach_status(&status);
+  dds::DdsTelemetryPublisher telemetry(participant);
   RuntimeOptions options;
   options.fifo_priority = args.fifo_priority;
   options.lock_memory = args.lock_memory;
@@ -134,8 +140,10 @@ int control_command(const ControlArgs& args) {
   const auto drain = [&] {
     while (auto record = controller.closed_records().pop()) {
       ledger.write(*record);
+      telemetry.publish(*record);
       ++records;
     }
+    if (status.buffer().take()) telemetry.offer(status.buffer().front());
     while (auto event = controller.events().pop()) {
       collector.add_event(*event);
       log_control_event(*event);
@@ -211,7 +219,10 @@ int control_command(const ControlArgs& args) {
                  {"feedback_accepted", sensor_counts.feedback_accepted},
                  {"sensors_stale_scans", io.sensors_stale_scans()},
                  {"estimate_transport_us", summary_json(latency.transport)},
-                 {"estimate_to_command_us", summary_json(latency.reaction)}};
+                 {"estimate_to_command_us", summary_json(latency.reaction)},
+                 {"ledger_records_published", telemetry.counters().records_published},
+                 {"kpis_published", telemetry.counters().kpis_published},
+                 {"telemetry_write_failures", telemetry.counters().write_failures}};
 
   std::printf(
       "control, %.1f s fed, %.1f s wall, %llu scans, %llu overruns, wake-up latency "
@@ -235,13 +246,16 @@ int control_command(const ControlArgs& args) {
   std::printf("\nthroughput      %.1f items/min at the takt\n", kpis.items_per_minute);
   std::printf(
       "dds             %llu commands (%llu dropped), %llu estimates (%llu rejected), "
-      "%llu sensor samples, %llu stale scans\n",
+      "%llu sensor samples, %llu stale scans, %llu ledger records and %llu KPI samples "
+      "published\n",
       static_cast<unsigned long long>(out.commands_published),
       static_cast<unsigned long long>(out.commands_dropped),
       static_cast<unsigned long long>(intake.samples_accepted),
       static_cast<unsigned long long>(intake.rejected_total()),
       static_cast<unsigned long long>(sensor_counts.sensors_accepted),
-      static_cast<unsigned long long>(io.sensors_stale_scans()));
+      static_cast<unsigned long long>(io.sensors_stale_scans()),
+      static_cast<unsigned long long>(telemetry.counters().records_published),
+      static_cast<unsigned long long>(telemetry.counters().kpis_published));
   std::printf(
       "latency         estimate transport p50 %.1f us p99 %.1f us; estimate to command "
       "p50 %.1f us p99 %.1f us max %.1f us (%llu frames)\n",

@@ -1,5 +1,7 @@
 #include "fl/drivers/dds/qos.hpp"
 
+#include "fillet_line.h"
+
 namespace fl::drivers::dds {
 
 Qos estimates_qos(std::int64_t camera_period_ns) {
@@ -42,6 +44,18 @@ Qos status_qos() {
   dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
   return qos;
 }
+
+Qos ledger_qos() {
+  Qos qos = make_qos();
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, fl_LEDGER_HISTORY);
+  dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
+  dds_qset_durability_service(qos.get(), 0, DDS_HISTORY_KEEP_LAST, fl_LEDGER_HISTORY,
+                              DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
+  return qos;
+}
+
+Qos kpis_qos() { return status_qos(); }
 
 Qos feedback_qos() {
   Qos qos = make_qos();

@@ -15,6 +15,9 @@ inline constexpr const char* kCommandTopic = "fl/line/command";
 inline constexpr const char* kStatusTopic = "fl/line/status";
 inline constexpr const char* kFeedbackTopic = "fl/drive/feedback";
 inline constexpr const char* kSensorsTopic = "fl/line/sensors";
+inline constexpr const char* kLedgerTopic = "fl/line/ledger";
+inline constexpr const char* kKpisTopic = "fl/line/kpis";
+inline constexpr const char* kCycleTopic = "fl/line/cycle";
 
 // A silent camera is noticed after this many of its frame periods: one lost frame is
 // normal jitter, three in a row is a camera that stopped (and still well inside the
@@ -46,6 +49,15 @@ Qos status_qos();
 // the controller can tell a silent I/O side from a quiet one.
 Qos sensors_qos(std::int64_t scan_period_ns = kScanPeriodNs);
 // Drive feedback telemetry: best-effort keep-last 1 per drive; the next sample supersedes.
+// Also the cycle statistics (fl/line/cycle), for the same reason.
 Qos feedback_qos();
+// The fillet ledger: reliable, transient-local, keep-last LEDGER_HISTORY (the IDL's): every
+// closed fillet reaches a live subscriber, and one that joins late (an MES restarted) still
+// gets the last LEDGER_HISTORY records. Not keep-all: a stuck subscriber must not make the
+// controller's telemetry thread block.
+Qos ledger_qos();
+// KPIs: as the status (reliable keep-last 1, transient-local): a late dashboard gets the
+// current totals at once.
+Qos kpis_qos();
 
 }  // namespace fl::drivers::dds

@@ -1,0 +1,62 @@
+// The controller's telemetry for the plant beyond the operator screen (MES, dashboards,
+// audits): every closed fillet record on fl/line/ledger, and once a period the KPIs
+// (fl/line/kpis) and the scan timing (fl/line/cycle) from the line status snapshots. Runs on
+// a non-real-time thread (the one that drains the controller's ledger ring); DDS allocates
+// and locks inside.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "fillet_line.h"
+#include "fl/controller/ledger.hpp"
+#include "fl/controller/line_status.hpp"
+#include "fl/drivers/dds/entity.hpp"
+
+namespace fl::drivers::dds {
+
+void to_idl(const FilletRecord& record, fl_FilletLedgerRecord& sample) noexcept;
+// nullopt when an enumeration is out of range (a sample from a newer or broken writer).
+std::optional<FilletRecord> from_idl(const fl_FilletLedgerRecord& sample) noexcept;
+void to_idl(const LineStatus& status, fl_LineKpis& sample) noexcept;
+void to_idl(const LineStatus& status, fl_CycleStatistics& sample) noexcept;
+
+struct TelemetryCounters {
+  std::uint64_t records_published = 0;
+  std::uint64_t kpis_published = 0;
+  std::uint64_t write_failures = 0;  // DDS refused a write (logged once per kind)
+};
+
+class DdsTelemetryPublisher {
+ public:
+  // `period_ns`: KPIs and cycle statistics at most this often, by the snapshots' time.
+  explicit DdsTelemetryPublisher(const Participant& participant,
+                                 std::int64_t period_ns = 1'000'000'000);
+
+  // One closed record. A failed write is counted and logged, never thrown: the ledger CSV
+  // beside it stays the record of truth.
+  void publish(const FilletRecord& record);
+  // Publishes KPIs and cycle statistics from `status` when a period has passed since the
+  // last publication (or none was made); returns whether it did.
+  bool offer(const LineStatus& status);
+
+  [[nodiscard]] const TelemetryCounters& counters() const noexcept { return counters_; }
+  [[nodiscard]] std::uint32_t matched_ledger_readers() const {
+    return ledger_writer_.matched_readers();
+  }
+
+ private:
+  void count_failure(dds_return_t result, const char* topic);
+
+  std::int64_t period_ns_;
+  Topic ledger_topic_;
+  Topic kpis_topic_;
+  Topic cycle_topic_;
+  Writer ledger_writer_;
+  Writer kpis_writer_;
+  Writer cycle_writer_;
+  std::optional<std::int64_t> last_offer_ns_;
+  TelemetryCounters counters_;
+};
+
+}  // namespace fl::drivers::dds

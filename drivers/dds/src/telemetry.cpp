@@ -1,0 +1,127 @@
+#include "fl/drivers/dds/telemetry.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include "fl/drivers/dds/qos.hpp"
+
+namespace fl::drivers::dds {
+namespace {
+
+static_assert(fl_OUTCOME_COUNT == kOutcomeCount, "the IDL's OUTCOME_COUNT follows fl::Outcome");
+// The last enumerator of fl::LostReason; from_idl refuses anything beyond.
+constexpr auto kLastLostReason = static_cast<std::uint8_t>(LostReason::kRunEnded);
+
+}  // namespace
+
+void to_idl(const FilletRecord& record, fl_FilletLedgerRecord& sample) noexcept {
+  sample.id = record.id;
+  sample.created_ns = record.created_ns;
+  sample.closed_ns = record.closed_ns;
+  sample.outcome = static_cast<std::uint8_t>(record.outcome);
+  sample.lost_reason = static_cast<std::uint8_t>(record.lost_reason);
+  sample.hand = static_cast<fl_Hand>(record.hand);
+  sample.side_seen = static_cast<fl_SideUp>(record.side_seen);
+  sample.singulated = record.singulated;
+  sample.flip_plate1 = record.flip_plate1;
+  sample.flip_plate2 = record.flip_plate2;
+  sample.multilane_unit = record.multilane_unit;
+  sample.angle_at_camera1_rad = record.angle_at_camera1_rad;
+  sample.final_angle_rad = record.final_angle_rad;
+  sample.final_y_mm = record.final_y_mm;
+}
+
+std::optional<FilletRecord> from_idl(const fl_FilletLedgerRecord& sample) noexcept {
+  if (sample.outcome >= kOutcomeCount || sample.lost_reason > kLastLostReason ||
+      sample.hand < fl_HAND_UNKNOWN || sample.hand > fl_HAND_RIGHT ||
+      sample.side_seen < fl_SIDE_UNKNOWN || sample.side_seen > fl_SIDE_BONE ||
+      sample.multilane_unit < -1 || sample.multilane_unit > 1) {
+    return std::nullopt;
+  }
+  FilletRecord record;
+  record.id = sample.id;
+  record.created_ns = sample.created_ns;
+  record.closed_ns = sample.closed_ns;
+  record.outcome = static_cast<Outcome>(sample.outcome);
+  record.lost_reason = static_cast<LostReason>(sample.lost_reason);
+  record.hand = static_cast<Hand>(sample.hand);
+  record.side_seen = static_cast<SideUp>(sample.side_seen);
+  record.singulated = sample.singulated;
+  record.flip_plate1 = sample.flip_plate1;
+  record.flip_plate2 = sample.flip_plate2;
+  record.multilane_unit = static_cast<std::int8_t>(sample.multilane_unit);
+  record.angle_at_camera1_rad = sample.angle_at_camera1_rad;
+  record.final_angle_rad = sample.final_angle_rad;
+  record.final_y_mm = sample.final_y_mm;
+  return record;
+}
+
+void to_idl(const LineStatus& status, fl_LineKpis& sample) noexcept {
+  const ControllerCounters& counters = status.counters;
+  sample.time_ns = status.time_ns;
+  sample.items_created = counters.items_created;
+  sample.items_adopted = counters.items_adopted;
+  sample.items_closed = counters.items_closed;
+  sample.takt_strokes = counters.takt_strokes;
+  sample.reject_reversals = counters.reject_reversals;
+  sample.flip_conflicts = counters.flip_conflicts;
+  sample.estimates_rejected = counters.estimates_rejected;
+  sample.frames_processed = counters.frames_processed;
+  for (std::size_t o = 0; o < kOutcomeCount; ++o) sample.outcomes[o] = counters.outcomes[o];
+  sample.records_dropped = status.records_dropped;
+  sample.events_dropped = status.events_dropped;
+}
+
+void to_idl(const LineStatus& status, fl_CycleStatistics& sample) noexcept {
+  const ScanTimingStatus& timing = status.timing;
+  sample.time_ns = status.time_ns;
+  sample.period_ns = timing.period_ns;
+  sample.scans = timing.scans;
+  sample.overruns = timing.overruns;
+  sample.last_wakeup_latency_ns = timing.last_wakeup_latency_ns;
+  sample.last_compute_ns = timing.last_compute_ns;
+  sample.window_max_wakeup_latency_ns = timing.window_max_wakeup_latency_ns;
+  sample.window_max_compute_ns = timing.window_max_compute_ns;
+  sample.max_wakeup_latency_ns = timing.max_wakeup_latency_ns;
+  sample.max_compute_ns = timing.max_compute_ns;
+}
+
+DdsTelemetryPublisher::DdsTelemetryPublisher(const Participant& participant, std::int64_t period_ns)
+    : period_ns_(period_ns),
+      ledger_topic_(participant, fl_FilletLedgerRecord_desc, kLedgerTopic),
+      kpis_topic_(participant, fl_LineKpis_desc, kKpisTopic),
+      cycle_topic_(participant, fl_CycleStatistics_desc, kCycleTopic),
+      ledger_writer_(participant, ledger_topic_, ledger_qos().get()),
+      kpis_writer_(participant, kpis_topic_, kpis_qos().get()),
+      cycle_writer_(participant, cycle_topic_, feedback_qos().get()) {}
+
+void DdsTelemetryPublisher::count_failure(dds_return_t result, const char* topic) {
+  if (result >= 0) return;
+  if (counters_.write_failures++ == 0) {
+    spdlog::warn("telemetry: writing {} failed ({}); the ledger CSV still has every record", topic,
+                 dds_strretcode(result));
+  }
+}
+
+void DdsTelemetryPublisher::publish(const FilletRecord& record) {
+  fl_FilletLedgerRecord sample{};
+  to_idl(record, sample);
+  const dds_return_t result = ledger_writer_.write(sample);
+  count_failure(result, kLedgerTopic);
+  if (result >= 0) ++counters_.records_published;
+}
+
+bool DdsTelemetryPublisher::offer(const LineStatus& status) {
+  if (last_offer_ns_ && status.time_ns - *last_offer_ns_ < period_ns_) return false;
+  last_offer_ns_ = status.time_ns;
+  fl_LineKpis kpis{};
+  to_idl(status, kpis);
+  const dds_return_t kpis_result = kpis_writer_.write(kpis);
+  count_failure(kpis_result, kKpisTopic);
+  fl_CycleStatistics cycle{};
+  to_idl(status, cycle);
+  count_failure(cycle_writer_.write(cycle), kCycleTopic);
+  if (kpis_result >= 0) ++counters_.kpis_published;
+  return true;
+}
+
+}  // namespace fl::drivers::dds
