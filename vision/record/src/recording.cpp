@@ -117,6 +117,8 @@ RecordingWriter::RecordingWriter(const std::filesystem::path& path, WriterSettin
     : settings_(std::move(settings)) {
   mcap::WriterOptions options;
   options.library = "fl_vision_record";
+  // A recorder on the line can lose power: every closed chunk must be on the disk.
+  options.sync_chunks = true;
   writer_ = std::make_unique<mcap::Writer>(path, options);
   settings_.info["format_version"] = std::string(kRecordingFormatVersion);
   writer_->write_metadata({std::string(kInfoMetadataName), settings_.info});
@@ -349,52 +351,168 @@ ChannelInfo classify(const mcap::Channel& channel, const mcap::Schema* schema,
   return info;
 }
 
-// One truth message; RecordingError naming `where` and the field when it is malformed.
-std::vector<TrueFillet> decode_truth(const Bytes& data, const std::string& where) {
+// Where a JSON text stops parsing, as a field path ("fillets[2].x_mm"): a SAX pass that builds
+// nothing, run only on a message that does not parse, so that the error names the field.
+class JsonErrorPath final : public nlohmann::json_sax<nlohmann::json> {
+ public:
+  bool null() override { return value(); }
+  bool boolean(bool /*value*/) override { return value(); }
+  bool number_integer(number_integer_t /*value*/) override { return value(); }
+  bool number_unsigned(number_unsigned_t /*value*/) override { return value(); }
+  bool number_float(number_float_t /*value*/, const string_t& /*text*/) override { return value(); }
+  bool string(string_t& /*value*/) override { return value(); }
+  bool binary(binary_t& /*value*/) override { return value(); }
+  bool start_object(std::size_t /*elements*/) override {
+    levels_.push_back({false, 0, {}});
+    return true;
+  }
+  bool key(string_t& name) override {
+    levels_.back().key = name;
+    return true;
+  }
+  bool end_object() override {
+    levels_.pop_back();
+    return value();
+  }
+  bool start_array(std::size_t /*elements*/) override {
+    levels_.push_back({true, 0, {}});
+    return true;
+  }
+  bool end_array() override {
+    levels_.pop_back();
+    return value();
+  }
+  bool parse_error(std::size_t position, const std::string& /*token*/,
+                   const nlohmann::detail::exception& error) override {
+    std::string reason = error.what();  // "[json.exception.parse_error.101] parse error at ..."
+    if (const auto end = reason.find("] "); end != std::string::npos) reason.erase(0, end + 2);
+    error_ = "byte " + std::to_string(position) + ", at " + path() + ": " + reason;
+    return false;
+  }
+
+  // "byte 57, at fillets[0].x_mm: number overflow parsing '1e999'".
+  [[nodiscard]] const std::string& error() const { return error_; }
+
+ private:
+  struct Level {
+    bool array = false;
+    std::size_t index = 0;  // arrays: the element being parsed
+    std::string key;        // objects: the member being parsed
+  };
+
+  bool value() {
+    if (!levels_.empty() && levels_.back().array) ++levels_.back().index;
+    return true;
+  }
+
+  [[nodiscard]] std::string path() const {
+    std::string text;
+    for (const Level& level : levels_) {
+      if (level.array) {
+        text += "[" + std::to_string(level.index) + "]";
+      } else if (!level.key.empty()) {
+        text += (text.empty() ? "" : ".") + level.key;
+      }
+    }
+    return text.empty() ? "the top level" : text;
+  }
+
+  std::vector<Level> levels_;
+  std::string error_;
+};
+
+// One truth message of `camera`'s truth channel, MCAP sequence `sequence` at `log_time_ns`;
+// RecordingError naming `where` and the field when it is malformed. The message's own camera,
+// sequence and exposure_ns, where given, must agree with the channel and the MCAP record.
+std::vector<TrueFillet> decode_truth(const Bytes& data, const std::string& where, CameraId camera,
+                                     std::uint32_t sequence, std::int64_t log_time_ns) {
   const nlohmann::json json = nlohmann::json::parse(data.begin(), data.end(), nullptr, false);
-  if (json.is_discarded() || !json.is_object() || !json.contains("fillets") ||
-      !json["fillets"].is_array()) {
-    throw RecordingError(where + ": not a truth message (a JSON object with a 'fillets' array)");
+  if (json.is_discarded()) {
+    JsonErrorPath sax;
+    (void)nlohmann::json::sax_parse(data.begin(), data.end(), &sax);
+    throw RecordingError(where + ": not a truth message, not JSON (" + sax.error() + ")");
+  }
+  if (!json.is_object() || !json.contains("fillets") || !json["fillets"].is_array()) {
+    throw RecordingError(where + ": not a truth message (a JSON object with a 'fillets' array): " +
+                         (json.is_object() ? (json.contains("fillets") ? "'fillets' is not an array"
+                                                                       : "no 'fillets'")
+                                           : "not an object"));
+  }
+  // The header fields are redundant with the channel and the MCAP record; a disagreement means
+  // a damaged or hand-made file, and which one is right would be a guess.
+  if (json.contains("camera") &&
+      (!json["camera"].is_string() || json["camera"].get<std::string>() != camera_name(camera))) {
+    throw RecordingError(where + ": camera: " + json["camera"].dump() +
+                         " on the channel of camera " + std::string(camera_name(camera)));
+  }
+  if (json.contains("sequence") && json["sequence"] != nlohmann::json(sequence)) {
+    throw RecordingError(where + ": sequence: " + json["sequence"].dump() +
+                         " in a message recorded as the truth of frame " +
+                         std::to_string(sequence));
+  }
+  if (json.contains("exposure_ns") && json["exposure_ns"] != nlohmann::json(log_time_ns)) {
+    throw RecordingError(where + ": exposure_ns: " + json["exposure_ns"].dump() +
+                         " in a message logged at " + std::to_string(log_time_ns) + " ns");
   }
   std::vector<TrueFillet> fillets;
   for (std::size_t i = 0; i < json["fillets"].size(); ++i) {
     const nlohmann::json& item = json["fillets"][i];
     const std::string at = where + ": fillets[" + std::to_string(i) + "]";
+    if (!item.is_object()) throw RecordingError(at + ": " + item.dump() + " is not an object");
+    const auto field = [&](const char* key) -> const nlohmann::json& {
+      if (!item.contains(key)) throw RecordingError(at + "." + key + ": missing");
+      return item[key];
+    };
     const auto number = [&](const char* key) {
-      if (!item.is_object() || !item.contains(key) || !item[key].is_number()) {
-        throw RecordingError(at + "." + key + ": missing or not a number");
+      const nlohmann::json& value = field(key);
+      if (value.is_null()) {
+        // nlohmann::json writes a NaN or an infinity as null.
+        throw RecordingError(at + "." + key + ": null, not a number (a non-finite value?)");
       }
-      const double value = item[key].get<double>();
-      if (!std::isfinite(value)) throw RecordingError(at + "." + key + ": not finite");
-      return value;
+      if (!value.is_number()) {
+        throw RecordingError(at + "." + key + ": " + value.dump() + " is not a number");
+      }
+      const double number_value = value.get<double>();
+      if (!std::isfinite(number_value)) throw RecordingError(at + "." + key + ": not finite");
+      return number_value;
     };
     const auto flag = [&](const char* key) {
-      if (!item.contains(key) || !item[key].is_boolean()) {
-        throw RecordingError(at + "." + key + ": missing or not true/false");
+      const nlohmann::json& value = field(key);
+      if (!value.is_boolean()) {
+        throw RecordingError(at + "." + key + ": " + value.dump() + " is not true or false");
       }
-      return item[key].get<bool>();
+      return value.get<bool>();
     };
     const auto name = [&](const char* key) {
-      if (!item.contains(key) || !item[key].is_string()) {
-        throw RecordingError(at + "." + key + ": missing or not a string");
+      const nlohmann::json& value = field(key);
+      if (!value.is_string()) {
+        throw RecordingError(at + "." + key + ": " + value.dump() + " is not a string");
       }
-      return item[key].get<std::string>();
+      return value.get<std::string>();
     };
     TrueFillet fillet;
     fillet.x_mm = number("x_mm");
     fillet.y_mm = number("y_mm");
     fillet.angle_rad = number("angle_rad");
-    const std::optional<Hand> hand = parse<Hand>(name("hand"));
-    const std::optional<SideUp> side = parse<SideUp>(name("side"));
-    if (!hand || *hand == Hand::kUnknown) throw RecordingError(at + ".hand: not left or right");
-    if (!side || *side == SideUp::kUnknown) throw RecordingError(at + ".side: not skin or bone");
+    const std::string hand_name = name("hand");
+    const std::optional<Hand> hand = parse<Hand>(hand_name);
+    if (!hand || *hand == Hand::kUnknown) {
+      throw RecordingError(at + ".hand: '" + hand_name + "' is not left or right");
+    }
+    const std::string side_name = name("side");
+    const std::optional<SideUp> side = parse<SideUp>(side_name);
+    if (!side || *side == SideUp::kUnknown) {
+      throw RecordingError(at + ".side: '" + side_name + "' is not skin or bone");
+    }
     fillet.hand = *hand;
     fillet.side = *side;
     // A whole number in int's range: casting any other double to int is undefined.
     const double group_id = number("group_id");
     if (group_id != std::floor(group_id) || group_id < -1.0 ||
         group_id > static_cast<double>(std::numeric_limits<int>::max())) {
-      throw RecordingError(at + ".group_id: not -1 or a whole number >= 0");
+      throw RecordingError(at + ".group_id: " + item["group_id"].dump() +
+                           " is not -1 or a whole number from 0 to " +
+                           std::to_string(std::numeric_limits<int>::max()));
     }
     fillet.group_id = static_cast<int>(group_id);
     fillet.singulated = flag("singulated");
@@ -522,7 +640,10 @@ Recording load_recording(const std::filesystem::path& path) {
         }
         case Kind::kTruth: {
           auto& truth = recording.cameras[index(channel.camera)].truth;
-          if (!truth.emplace(message.sequence, decode_truth(message.data, file + ": " + where))
+          if (!truth
+                   .emplace(message.sequence,
+                            decode_truth(message.data, file + ": " + where, channel.camera,
+                                         message.sequence, log_time_ns))
                    .second) {
             throw RecordingError(file + ": " + where + ": truth of a frame recorded twice");
           }
