@@ -6,10 +6,12 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "cli_support.hpp"
 #include "duration.hpp"
+#include "fl/apps/latency_probe.hpp"
 #include "fl/apps/soak.hpp"
 #include "fl/controller/config_loader.hpp"
 #include "fl/controller/line_status.hpp"
@@ -26,8 +28,11 @@ constexpr double kSecondsPerMinute = 60.0;
 // Samples the timeline from the scan's status snapshots and /proc, on the run's own thread.
 class SoakSampler {
  public:
-  SoakSampler(LineStatusPublisher& status, double sample_every_s)
-      : status_(status), sample_every_s_(sample_every_s), next_sample_s_(sample_every_s) {}
+  SoakSampler(LineStatusPublisher& status, LatencyProbe* probe, double sample_every_s)
+      : status_(status),
+        probe_(probe),
+        sample_every_s_(sample_every_s),
+        next_sample_s_(sample_every_s) {}
 
   void on_tick(double elapsed_s, const PlantIo& io) {
     if (status_.buffer().take()) {
@@ -50,6 +55,7 @@ class SoakSampler {
     sample.resident_kib = resident_kib().value_or(0);
     sample.max_wakeup_latency_ns = interval_latency_ns_;
     sample.max_compute_ns = interval_compute_ns_;
+    if (probe_ != nullptr) sample.probe_max_wakeup_latency_ns = probe_->take_interval_max_ns();
     sample.scans = scans_;
     sample.overruns = overruns_;
     sample.fillets_fed = io.fillets_fed();
@@ -73,6 +79,7 @@ class SoakSampler {
 
  private:
   LineStatusPublisher& status_;
+  LatencyProbe* probe_;
   double sample_every_s_;
   double next_sample_s_;
   double last_log_s_ = 0.0;
@@ -87,11 +94,13 @@ class SoakSampler {
 void write_timeline_csv(const std::vector<SoakSample>& timeline,
                         const std::filesystem::path& file) {
   report::CsvTable table({"elapsed_s", "resident_kib", "max_wakeup_latency_us", "max_compute_us",
-                          "scans", "overruns", "fillets_fed", "items_closed"});
+                          "probe_max_wakeup_latency_us", "scans", "overruns", "fillets_fed",
+                          "items_closed"});
   for (const SoakSample& sample : timeline) {
     table.add_row({sample.elapsed_s, static_cast<double>(sample.resident_kib),
                    static_cast<double>(sample.max_wakeup_latency_ns) / kNsPerUs,
                    static_cast<double>(sample.max_compute_ns) / kNsPerUs,
+                   static_cast<double>(sample.probe_max_wakeup_latency_ns) / kNsPerUs,
                    static_cast<double>(sample.scans), static_cast<double>(sample.overruns),
                    static_cast<double>(sample.fillets_fed),
                    static_cast<double>(sample.items_closed)});
@@ -115,6 +124,7 @@ std::string timeline_plots(const SoakRun& run, const SoakCriteria& criteria,
   std::vector<double> resident_mib;
   std::vector<double> latency_us;
   std::vector<double> compute_us;
+  std::vector<double> probe_us;
   for (const SoakSample& sample : run.timeline) {
     if (sample.resident_kib == 0) continue;
     time_min.push_back(sample.elapsed_s / kSecondsPerMinute);
@@ -123,6 +133,8 @@ std::string timeline_plots(const SoakRun& run, const SoakCriteria& criteria,
     latency_us.push_back(
         std::max(1.0, static_cast<double>(sample.max_wakeup_latency_ns) / kNsPerUs));
     compute_us.push_back(std::max(1.0, static_cast<double>(sample.max_compute_ns) / kNsPerUs));
+    probe_us.push_back(
+        std::max(1.0, static_cast<double>(sample.probe_max_wakeup_latency_ns) / kNsPerUs));
   }
   if (time_min.empty()) return "<p>No timeline sample was taken.</p>\n";
   report::Plot memory;
@@ -146,6 +158,7 @@ std::string timeline_plots(const SoakRun& run, const SoakCriteria& criteria,
   timing.y.log = true;
   timing.series.push_back(series("wake-up latency", time_min, latency_us));
   timing.series.push_back(series("compute", time_min, compute_us));
+  if (run.probe_ran) timing.series.push_back(series("machine (probe) wake-up", time_min, probe_us));
   timing.references.push_back(
       {.vertical = false,
        .value = static_cast<double>(criteria.max_wakeup_latency_ns) / kNsPerUs,
@@ -166,6 +179,9 @@ void write_html(const SoakRun& run, const SoakCriteria& criteria, const SoakVerd
     // The sentences are evaluate_soak()'s own, numbers and words only: nothing to escape.
     for (const std::string& failure : verdict.failures) html << "<li>" << failure << "</li>\n";
     html << "</ul>\n";
+  }
+  if (!verdict.deadline_diagnosis.empty()) {
+    html << "<p><b>Late scans:</b> " << verdict.deadline_diagnosis << ".</p>\n";
   }
   const auto row = [&](const char* name, const std::string& value, const std::string& bound) {
     html << "<tr><th>" << name << "</th><td>" << value << "</td><td>" << bound << "</td></tr>\n";
@@ -191,6 +207,14 @@ void write_html(const SoakRun& run, const SoakCriteria& criteria, const SoakVerd
   row("scans woken late", std::to_string(verdict.late_scans),
       fmt::format("0 at or beyond {:.0f} us",
                   static_cast<double>(criteria.max_wakeup_latency_ns) / kNsPerUs));
+  if (run.probe_ran) {
+    row("machine baseline (probe beside the scan)",
+        fmt::format("{} wake-ups, {} at or beyond the bound, worst {:.0f} us ({})",
+                    run.probe_latency.count, run.probe_at_or_beyond_bound,
+                    static_cast<double>(run.probe_latency.max_ns) / kNsPerUs,
+                    run.probe_fifo ? "SCHED_FIFO" : "SCHED_OTHER"),
+        "");
+  }
   row("overruns", std::to_string(verdict.overruns), "0");
   row("worst compute",
       fmt::format("{:.0f} us", static_cast<double>(run.cycle.compute.max_ns) / kNsPerUs), "");
@@ -227,6 +251,10 @@ CLI::App* add_soak_subcommand(CLI::App& app, SoakArgs& args) {
                  "judge the run even when SCHED_FIFO cannot be applied (e.g. no CAP_SYS_NICE)");
   soak->add_flag("!--no-mlock", args.lock_memory, "do not lock memory (mlockall)");
   add_cpu_dma_latency_option(*soak, args.cpu_dma_latency_us);
+  soak->add_flag("!--no-probe", args.latency_probe,
+                 "no machine baseline: by default a bare thread sleeps on the scan's schedule "
+                 "one priority below it, so late scans can be told the machine's or the "
+                 "controller's");
   soak->add_option("--warm-up", args.warm_up, "time before memory is judged (default 5m)");
   soak->add_option("--sample-every", args.sample_every, "timeline interval (default 10s)");
   soak->add_option("--max-growth-kib", args.max_resident_growth_kib,
@@ -274,7 +302,13 @@ int soak_command(const SoakArgs& args) {
       *duration_s, plant->name(), args.fifo_priority, args.seed, config.string(), out.string());
 
   LineStatusPublisher status;
-  SoakSampler sampler(status, *sample_every_s);
+  // The machine's baseline beside the scan, one priority below it, as cyclictest -p79 would.
+  std::optional<LatencyProbe> probe;
+  if (args.latency_probe) {
+    probe.emplace(RuntimeOptions{}.period_ns, args.fifo_priority > 1 ? args.fifo_priority - 1 : 0);
+    if (const std::string refused = probe->start(); !refused.empty()) spdlog::warn("{}", refused);
+  }
+  SoakSampler sampler(status, probe ? &*probe : nullptr, *sample_every_s);
   RealtimeRunOptions options;
   options.duration_s = *duration_s;
   options.seed = args.seed;
@@ -301,6 +335,14 @@ int soak_command(const SoakArgs& args) {
   run.scans_at_or_beyond_bound =
       count_at_or_beyond(result.cycle_stats.wakeup_latency(), criteria.max_wakeup_latency_ns);
   run.kpis = result.kpis;
+  if (probe) {
+    probe->stop();
+    run.probe_ran = true;
+    run.probe_fifo = probe->fifo_applied();
+    run.probe_latency = probe->histogram().summary();
+    run.probe_at_or_beyond_bound =
+        count_at_or_beyond(probe->histogram(), criteria.max_wakeup_latency_ns);
+  }
   const SoakVerdict verdict = evaluate_soak(run, criteria);
 
   {
@@ -322,6 +364,9 @@ int soak_command(const SoakArgs& args) {
       static_cast<unsigned long long>(verdict.lost_fillets));
   for (const std::string& failure : verdict.failures)
     std::printf("  failed: %s\n", failure.c_str());
+  if (!verdict.deadline_diagnosis.empty()) {
+    std::printf("  late scans: %s\n", verdict.deadline_diagnosis.c_str());
+  }
   std::fflush(stdout);
   spdlog::info("soak report: {}", (out / "soak.html").string());
   return verdict.passed ? 0 : 1;

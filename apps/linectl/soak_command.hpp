@@ -21,7 +21,9 @@ struct SoakArgs {
   int fifo_priority = 80;  // the service's priority (deploy/fillet-line.service)
   bool allow_no_fifo = false;
   bool lock_memory = true;
-  int cpu_dma_latency_us = 0;  // as the service holds it (deploy/fillet-line.default)
+  int cpu_dma_latency_us = 0;
+  bool latency_probe = true;  // the machine's baseline beside the scan (LatencyProbe)  // as the
+                              // service holds it (deploy/fillet-line.default)
   std::string warm_up = "5m";
   std::string sample_every = "10s";
   std::uint64_t max_resident_growth_kib = 1024;

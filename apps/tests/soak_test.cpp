@@ -5,8 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstring>
+#include <thread>
 #include <vector>
+
+#include "fl/apps/latency_probe.hpp"
 
 namespace fl::apps {
 namespace {
@@ -83,6 +87,74 @@ TEST(SoakVerdict, ALateScanOrAnOverrunFails) {
   SoakRun overrun = healthy_run();
   overrun.cycle.overruns = 1;
   EXPECT_FALSE(evaluate_soak(overrun, hour_criteria()).passed);
+}
+
+// Late scans in intervals 10 and 20 (of 363); the probe beside the scan late in `probe_late`
+// of them, and `probe_late_total` times over the run.
+SoakRun run_with_late_scans(const std::vector<int>& probe_late_intervals,
+                            std::uint64_t probe_late_total) {
+  SoakRun run = healthy_run();
+  run.scans_at_or_beyond_bound = 3;
+  run.cycle.wakeup_latency.max_ns = 4 * kOneMsNs;
+  run.timeline[10].max_wakeup_latency_ns = 4 * kOneMsNs;
+  run.timeline[20].max_wakeup_latency_ns = kOneMsNs;  // exactly the bound counts as late
+  run.probe_ran = true;
+  run.probe_fifo = true;
+  run.probe_at_or_beyond_bound = probe_late_total;
+  run.probe_latency.max_ns = probe_late_total > 0 ? 5 * kOneMsNs : 150'000;
+  for (const int interval : probe_late_intervals) {
+    run.timeline[static_cast<std::size_t>(interval)].probe_max_wakeup_latency_ns = 5 * kOneMsNs;
+  }
+  return run;
+}
+
+TEST(SoakDeadlineDiagnosis, AProbeLateInTheSameIntervalsBlamesTheMachine) {
+  // The probe was late in both intervals with a late scan, and once more elsewhere.
+  SoakRun run = run_with_late_scans({10, 20, 30}, 3);
+  const SoakVerdict verdict = evaluate_soak(run, hour_criteria());
+  EXPECT_FALSE(verdict.passed);  // the criterion is the scan's: the diagnosis only explains
+  EXPECT_EQ(verdict.intervals_with_late_scan, 2U);
+  EXPECT_EQ(verdict.of_which_probe_late, 2U);
+  EXPECT_NE(verdict.deadline_diagnosis.find("machine itself is late"), std::string::npos)
+      << verdict.deadline_diagnosis;
+  EXPECT_NE(verdict.deadline_diagnosis.find("2 of the 2 intervals"), std::string::npos)
+      << verdict.deadline_diagnosis;
+}
+
+TEST(SoakDeadlineDiagnosis, AProbeNeverLateBlamesTheController) {
+  const SoakVerdict verdict = evaluate_soak(run_with_late_scans({}, 0), hour_criteria());
+  EXPECT_EQ(verdict.intervals_with_late_scan, 2U);
+  EXPECT_EQ(verdict.of_which_probe_late, 0U);
+  EXPECT_NE(verdict.deadline_diagnosis.find("controller delays its own scans"), std::string::npos)
+      << verdict.deadline_diagnosis;
+}
+
+TEST(SoakDeadlineDiagnosis, NoLateScanNeedsNoDiagnosisAndNoProbeSaysSo) {
+  EXPECT_TRUE(evaluate_soak(healthy_run(), hour_criteria()).deadline_diagnosis.empty());
+  SoakRun no_probe = run_with_late_scans({}, 0);
+  no_probe.probe_ran = false;
+  EXPECT_NE(evaluate_soak(no_probe, hour_criteria()).deadline_diagnosis.find("no latency probe"),
+            std::string::npos);
+}
+
+TEST(LatencyProbe, MeasuresEveryWakeUpOnItsScheduleAndHandsOutTheIntervalMaximum) {
+  constexpr std::int64_t kPeriodNs = 1'000'000;  // 1 ms: 200 wake-ups in the 200 ms below
+  LatencyProbe probe(kPeriodNs, 0);              // SCHED_OTHER: no privilege needed
+  EXPECT_TRUE(probe.start().empty());
+  const auto started = std::chrono::steady_clock::now();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  probe.stop();
+  const double ran_ns = static_cast<double>(std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                                std::chrono::steady_clock::now() - started)
+                                                .count());
+  const DurationHistogram& histogram = probe.histogram();
+  // It woke at least once, and never more often than its schedule allows (+1: the last
+  // period may end just after stop() was asked).
+  EXPECT_GT(histogram.count(), 0U);
+  EXPECT_LE(static_cast<double>(histogram.count()), ran_ns / static_cast<double>(kPeriodNs) + 1.0);
+  // Never taken during the run: the interval maximum is the run's maximum, then resets.
+  EXPECT_EQ(probe.take_interval_max_ns(), histogram.max_ns());
+  EXPECT_EQ(probe.take_interval_max_ns(), 0);
 }
 
 TEST(SoakVerdict, WithoutFifoItFailsUnlessAllowed) {

@@ -74,6 +74,39 @@ SoakVerdict evaluate_soak(const SoakRun& run, const SoakCriteria& criteria) {
                                    verdict.overruns, verdict.missed_periods));
   }
 
+  // The machine's share of the misses: a bare thread on the same schedule, late in the same
+  // intervals, points at the machine; a probe that was never late points at the controller.
+  for (const SoakSample& sample : run.timeline) {
+    if (sample.max_wakeup_latency_ns < criteria.max_wakeup_latency_ns) continue;
+    ++verdict.intervals_with_late_scan;
+    if (sample.probe_max_wakeup_latency_ns >= criteria.max_wakeup_latency_ns) {
+      ++verdict.of_which_probe_late;
+    }
+  }
+  const double bound_us = static_cast<double>(criteria.max_wakeup_latency_ns) / 1e3;
+  if (verdict.late_scans == 0) {
+    verdict.deadline_diagnosis.clear();
+  } else if (!run.probe_ran) {
+    verdict.deadline_diagnosis =
+        "no latency probe ran beside the scan, so the late scans cannot be told the machine's "
+        "or the controller's";
+  } else if (run.probe_at_or_beyond_bound > 0) {
+    verdict.deadline_diagnosis = fmt::format(
+        "the machine itself is late: a bare thread on the same 10 ms schedule{} woke {} times "
+        "{:.0f} us or more late (worst {:.0f} us), and was late in {} of the {} intervals in "
+        "which the scan was. The tails are the machine's (hypervisor, firmware, kernel), not "
+        "the controller's: measure on the line PC, or tune it (isolated core, C-states)",
+        run.probe_fifo ? " (SCHED_FIFO, one below the scan)" : " (SCHED_OTHER)",
+        run.probe_at_or_beyond_bound, bound_us, static_cast<double>(run.probe_latency.max_ns) / 1e3,
+        verdict.of_which_probe_late, verdict.intervals_with_late_scan);
+  } else {
+    verdict.deadline_diagnosis = fmt::format(
+        "the machine was never late (a bare thread on the same schedule stayed under {:.0f} us, "
+        "worst {:.0f} us) while the scan was: the controller delays its own scans (compute, "
+        "locks, page faults, I/O)",
+        bound_us, static_cast<double>(run.probe_latency.max_ns) / 1e3);
+  }
+
   // Fillets.
   const Kpis& kpis = run.kpis;
   verdict.lost_fillets = kpis.outcomes[static_cast<std::size_t>(Outcome::kLost)];
@@ -111,6 +144,8 @@ nlohmann::json to_json(const SoakSample& sample) {
           {"resident_kib", sample.resident_kib},
           {"max_wakeup_latency_us", static_cast<double>(sample.max_wakeup_latency_ns) / 1e3},
           {"max_compute_us", static_cast<double>(sample.max_compute_ns) / 1e3},
+          {"probe_max_wakeup_latency_us",
+           static_cast<double>(sample.probe_max_wakeup_latency_ns) / 1e3},
           {"scans", sample.scans},
           {"overruns", sample.overruns},
           {"fillets_fed", sample.fillets_fed},
@@ -134,6 +169,9 @@ nlohmann::json to_json(const SoakVerdict& verdict) {
       {"late_scans", verdict.late_scans},
       {"overruns", verdict.overruns},
       {"missed_periods", verdict.missed_periods},
+      {"intervals_with_late_scan", verdict.intervals_with_late_scan},
+      {"of_which_probe_late", verdict.of_which_probe_late},
+      {"deadline_diagnosis", verdict.deadline_diagnosis},
       {"lost_fillets", verdict.lost_fillets},
       {"books_balanced", verdict.books_balanced}};
   json["resident_at_warm_up_kib"] = verdict.resident_at_warm_up_kib
@@ -146,20 +184,25 @@ nlohmann::json to_json(const SoakRun& run, const SoakCriteria& criteria,
                        const SoakVerdict& verdict) {
   nlohmann::json timeline = nlohmann::json::array();
   for (const SoakSample& sample : run.timeline) timeline.push_back(to_json(sample));
-  return {{"verdict", to_json(verdict)},
-          {"criteria", to_json(criteria)},
-          {"planned_s", run.planned_s},
-          {"fed_s", run.fed_s},
-          {"elapsed_s", run.elapsed_s},
-          {"stopped_by_signal", run.stopped_by_signal},
-          {"fifo_applied", run.fifo_applied},
-          {"memory_locked", run.memory_locked},
-          {"dma_latency_held", run.dma_latency_held},
-          {"scans", run.cycle.scans},
-          {"wakeup_latency_us", to_json_us(run.cycle.wakeup_latency)},
-          {"compute_us", to_json_us(run.cycle.compute)},
-          {"kpis", to_json(run.kpis)},
-          {"timeline", timeline}};
+  return {
+      {"verdict", to_json(verdict)},
+      {"criteria", to_json(criteria)},
+      {"planned_s", run.planned_s},
+      {"fed_s", run.fed_s},
+      {"elapsed_s", run.elapsed_s},
+      {"stopped_by_signal", run.stopped_by_signal},
+      {"fifo_applied", run.fifo_applied},
+      {"memory_locked", run.memory_locked},
+      {"dma_latency_held", run.dma_latency_held},
+      {"scans", run.cycle.scans},
+      {"wakeup_latency_us", to_json_us(run.cycle.wakeup_latency)},
+      {"compute_us", to_json_us(run.cycle.compute)},
+      {"probe", run.probe_ran ? nlohmann::json{{"fifo", run.probe_fifo},
+                                               {"wakeup_latency_us", to_json_us(run.probe_latency)},
+                                               {"at_or_beyond_bound", run.probe_at_or_beyond_bound}}
+                              : nlohmann::json(nullptr)},
+      {"kpis", to_json(run.kpis)},
+      {"timeline", timeline}};
 }
 
 }  // namespace fl::apps

@@ -22,6 +22,9 @@ struct SoakSample {
   // Maxima over the scans since the previous sample.
   std::int64_t max_wakeup_latency_ns = 0;
   std::int64_t max_compute_ns = 0;
+  // The machine's own worst wake-up in the interval (LatencyProbe beside the scan); 0 when
+  // no probe ran.
+  std::int64_t probe_max_wakeup_latency_ns = 0;
   // Running totals.
   std::uint64_t scans = 0;
   std::uint64_t overruns = 0;
@@ -48,6 +51,11 @@ struct SoakRun {
   std::vector<SoakSample> timeline;
   CycleStatsSummary cycle;
   std::uint64_t scans_at_or_beyond_bound = 0;  // from the whole run's wake-up histogram
+  // The machine's baseline (LatencyProbe), when one ran beside the scan.
+  bool probe_ran = false;
+  bool probe_fifo = false;
+  DistributionSummary probe_latency;
+  std::uint64_t probe_at_or_beyond_bound = 0;
   Kpis kpis;
 };
 
@@ -64,6 +72,13 @@ struct SoakVerdict {
   std::uint64_t late_scans = 0;  // woken at or beyond the bound (1 us histogram resolution)
   std::uint64_t overruns = 0;
   std::uint64_t missed_periods = 0;
+
+  // Whose are the late scans? Sample intervals with a scan woken at or beyond the bound, and
+  // how many of those had the probe late too; a sentence saying what that means (empty
+  // when no scan was late).
+  std::uint64_t intervals_with_late_scan = 0;
+  std::uint64_t of_which_probe_late = 0;
+  std::string deadline_diagnosis;
 
   std::uint64_t lost_fillets = 0;  // ledger kLost records
   bool books_balanced = false;     // ledger and plant truth both balance, no record dropped
