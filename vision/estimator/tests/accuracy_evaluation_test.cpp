@@ -17,18 +17,19 @@
 #include <cstdio>
 
 #include "fl/vision/accuracy.hpp"
+#include "fl/vision/record/twin_frame_source.hpp"
 #include "render_support.hpp"
 
 namespace fl::vision {
 namespace {
 
+using record::true_fillets;
 using testing::camera_640;
 using testing::camera_line;
 using testing::exact_calibration;
 using testing::nearest_fillet;
 using testing::random_scene;
 using testing::renderer;
-using testing::true_fillets;
 
 // A single is matched with the nearest fillet blob within 40 mm (nearest_fillet's gate, which
 // this suite has always used); a pair is flagged when every fillet blob within 100 mm of a

@@ -124,24 +124,6 @@ render::Scene random_scene(const render::RenderCamera& camera, std::uint64_t see
   return scene;
 }
 
-std::vector<TrueFillet> true_fillets(const render::RenderedFrame& frame) {
-  std::vector<TrueFillet> fillets;
-  fillets.reserve(frame.truth.size());
-  for (const render::FilletTruth& truth : frame.truth) {
-    TrueFillet fillet;
-    fillet.x_mm = truth.fillet.x_mm;
-    fillet.y_mm = truth.fillet.y_mm;
-    fillet.angle_rad = truth.fillet.angle_rad;
-    fillet.hand = truth.fillet.hand;
-    fillet.side = truth.fillet.side;
-    fillet.group_id = truth.fillet.group_id;
-    fillet.singulated = truth.singulated;
-    fillet.fully_visible = truth.fully_visible;
-    fillets.push_back(fillet);
-  }
-  return fillets;
-}
-
 double angle_difference_rad(double a, double b) {
   return std::abs(std::remainder(a - b, 2.0 * std::numbers::pi));
 }

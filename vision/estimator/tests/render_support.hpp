@@ -4,10 +4,8 @@
 #include <cstdint>
 #include <opencv2/core.hpp>
 #include <optional>
-#include <vector>
 
 #include "fl/twin/render/fillet_renderer.hpp"
-#include "fl/vision/accuracy.hpp"
 #include "fl/vision/calibration.hpp"
 #include "fl/vision/fillet_estimator.hpp"
 
@@ -41,10 +39,6 @@ struct RandomSceneOptions {
 // middle fillet(s) are fully visible.
 render::Scene random_scene(const render::RenderCamera& camera, std::uint64_t seed,
                            const RandomSceneOptions& options);
-
-// The renderer's truth of a frame as AccuracyTally takes it (as the twin's frame source
-// records it).
-std::vector<TrueFillet> true_fillets(const render::RenderedFrame& frame);
 
 // Smallest absolute difference of two angles, radians.
 double angle_difference_rad(double a, double b);

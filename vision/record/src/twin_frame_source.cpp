@@ -4,6 +4,24 @@
 
 namespace fl::vision::record {
 
+std::vector<TrueFillet> true_fillets(const render::RenderedFrame& frame) {
+  std::vector<TrueFillet> fillets;
+  fillets.reserve(frame.truth.size());
+  for (const render::FilletTruth& truth : frame.truth) {
+    TrueFillet fillet;
+    fillet.x_mm = truth.fillet.x_mm;
+    fillet.y_mm = truth.fillet.y_mm;
+    fillet.angle_rad = truth.fillet.angle_rad;
+    fillet.hand = truth.fillet.hand;
+    fillet.side = truth.fillet.side;
+    fillet.group_id = truth.fillet.group_id;
+    fillet.singulated = truth.singulated;
+    fillet.fully_visible = truth.fully_visible;
+    fillets.push_back(fillet);
+  }
+  return fillets;
+}
+
 TwinFrameSource::TwinFrameSource(std::shared_ptr<const render::FilletRenderer> renderer,
                                  const TwinScene& scene, TwinCameraSettings settings,
                                  std::string camera_name)
@@ -33,19 +51,7 @@ std::optional<SourceFrame> TwinFrameSource::next() {
   SourceFrame frame;
   render::RenderedFrame rendered = renderer_->render(camera_, scene);
   frame.bgr = std::move(rendered.bgr);
-  last_truth_.clear();
-  for (const render::FilletTruth& truth : rendered.truth) {
-    TrueFillet fillet;
-    fillet.x_mm = truth.fillet.x_mm;
-    fillet.y_mm = truth.fillet.y_mm;
-    fillet.angle_rad = truth.fillet.angle_rad;
-    fillet.hand = truth.fillet.hand;
-    fillet.side = truth.fillet.side;
-    fillet.group_id = truth.fillet.group_id;
-    fillet.singulated = truth.singulated;
-    fillet.fully_visible = truth.fully_visible;
-    last_truth_.push_back(fillet);
-  }
+  last_truth_ = true_fillets(rendered);
   frame.time_ns = scene_.time_ns();
   frame.sequence = sequence_++;
   frame.origin = "twin camera " + calibration_.camera_name;

@@ -15,6 +15,10 @@
 
 namespace fl::vision::record {
 
+// What the renderer put in a frame, as the accuracy tally and the recordings' truth channel
+// take it.
+std::vector<TrueFillet> true_fillets(const render::RenderedFrame& frame);
+
 // The twin's ground truth as a camera sees it, at the plant's current time.
 class TwinScene {
  public:
