@@ -16,24 +16,16 @@
 #include "fl/mcap/reader.hpp"
 #include "fl/mcap/writer.hpp"
 #include "fl/vision/record/replay.hpp"
+#include "record_test_support.hpp"
 
 namespace fl::vision::record {
 namespace {
 
 std::filesystem::path temp_file(const std::string& name) {
-  return std::filesystem::temp_directory_path() /
-         ("fl_recording_test_" + std::to_string(::getpid()) + "_" + name);
+  return test::temp_file("fl_recording_test", name);
 }
 
-BeltCalibration small_calibration() {
-  BeltCalibration calibration;
-  calibration.camera_name = "orientation";
-  calibration.image_width_px = 64;  // tiny frames: the file format does not care
-  calibration.image_height_px = 48;
-  // 1 mm/px, origin at the image centre, belt y up the image (as the twin's top-down camera).
-  calibration.image_to_belt = cv::Matx33d(1, 0, -32, 0, -1, 24, 0, 0, 1);
-  return calibration;
-}
+using test::small_calibration;
 
 cv::Mat blue_belt() { return {48, 64, CV_8UC3, cv::Scalar(165, 105, 35)}; }
 
