@@ -2,6 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <cstring>
+#include <type_traits>
+
 #include "fl/drivers/dds/qos.hpp"
 
 namespace fl::drivers::dds {
@@ -31,10 +34,15 @@ void to_idl(const FilletRecord& record, fl_FilletLedgerRecord& sample) noexcept 
 }
 
 std::optional<FilletRecord> from_idl(const fl_FilletLedgerRecord& sample) noexcept {
+  // The enums read as their underlying integers: loading an enum object that holds no
+  // enumerator's value is undefined behaviour (as in convert.cpp's validate()).
+  std::underlying_type_t<fl_Hand> hand = 0;
+  std::underlying_type_t<fl_SideUp> side = 0;
+  std::memcpy(&hand, &sample.hand, sizeof hand);
+  std::memcpy(&side, &sample.side_seen, sizeof side);
   if (sample.outcome >= kOutcomeCount || sample.lost_reason > kLastLostReason ||
-      sample.hand < fl_HAND_UNKNOWN || sample.hand > fl_HAND_RIGHT ||
-      sample.side_seen < fl_SIDE_UNKNOWN || sample.side_seen > fl_SIDE_BONE ||
-      sample.multilane_unit < -1 || sample.multilane_unit > 1) {
+      hand < fl_HAND_UNKNOWN || hand > fl_HAND_RIGHT || side < fl_SIDE_UNKNOWN ||
+      side > fl_SIDE_BONE || sample.multilane_unit < -1 || sample.multilane_unit > 1) {
     return std::nullopt;
   }
   FilletRecord record;
