@@ -220,8 +220,10 @@ RealtimeSetup ScanRuntime::start() {
     spdlog::warn("scan runtime runs without part of its real-time setup: {}", setup.error);
   }
 
-  first_wakeup_ns_ = monotonic_now_ns() + options_.period_ns;
-  heartbeat_ns_.store(first_wakeup_ns_, std::memory_order_relaxed);
+  // Until the scan thread is released the watchdog has nothing to judge: the time start()
+  // takes below (the watchdog thread, its priority, the log line) is not a stalled scan. On a
+  // slow machine (qemu at boot) that time alone exceeded the watchdog's limit.
+  heartbeat_ns_.store(std::numeric_limits<std::int64_t>::max(), std::memory_order_relaxed);
   running_.store(true, std::memory_order_release);
 
   if (options_.watchdog_periods > 0) {
@@ -263,6 +265,10 @@ RealtimeSetup ScanRuntime::start() {
           : "off");
 
   setup.started = true;
+  // The schedule and the watchdog's clock start at the release (the latch orders these
+  // stores before the scan thread's reads).
+  first_wakeup_ns_ = monotonic_now_ns() + options_.period_ns;
+  heartbeat_ns_.store(first_wakeup_ns_, std::memory_order_relaxed);
   start_gate_.count_down();
   return setup;
 }

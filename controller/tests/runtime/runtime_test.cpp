@@ -3,13 +3,18 @@
 #include <gtest/gtest.h>
 #include <pthread.h>
 #include <sched.h>
+#include <spdlog/sinks/base_sink.h>
+#include <spdlog/spdlog.h>
 #include <sys/mman.h>
 
 #include <array>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
+#include <string_view>
 #include <thread>
 
 #include "runtime_test_support.hpp"
@@ -286,6 +291,47 @@ TEST(ScanRuntime, WatchdogStaysQuietWhileScansRunAndAfterTheEnd) {
   runtime.wait();
   EXPECT_EQ(runtime.fault(), RuntimeFault::kNone);
   EXPECT_EQ(faults.calls.load(), 0);
+}
+
+// A log sink that stalls on the start-up line, as a slow journal or a machine under qemu does:
+// the time start() spends before it releases the scan thread.
+class SlowStartSink final : public spdlog::sinks::base_sink<std::mutex> {
+ public:
+  explicit SlowStartSink(std::int64_t stall_ns) : stall_ns_(stall_ns) {}
+
+ protected:
+  void sink_it_(const spdlog::details::log_msg& message) override {
+    const std::string_view text(message.payload.data(), message.payload.size());
+    if (text.find("scan runtime started") != std::string_view::npos) sleep_for_ns(stall_ns_);
+  }
+  void flush_() override {}
+
+ private:
+  std::int64_t stall_ns_;
+};
+
+TEST(ScanRuntime, WatchdogDoesNotCountASlowStartUpAsAStall) {
+  constexpr int kWatchdogPeriods = 3;  // 6 ms at 2 ms periods
+  // start() stalls 10 watchdog limits before it releases the scan: before the fix the
+  // watchdog, already running, faulted the runtime "after 0 scans" (seen under qemu at boot).
+  const std::shared_ptr<spdlog::logger> previous = spdlog::default_logger();
+  spdlog::set_default_logger(std::make_shared<spdlog::logger>(
+      "slow_start", std::make_shared<SlowStartSink>(10 * kWatchdogPeriods * 2 * kMs)));
+  CopyingIo io;
+  EchoLogic logic;
+  FaultRecord faults;
+  ScanRuntime runtime(io, logic,
+                      RuntimeOptions{.period_ns = 2 * kMs,
+                                     .max_scans = 20,
+                                     .watchdog_periods = kWatchdogPeriods,
+                                     .on_fault = faults.callback()});
+  const RealtimeSetup setup = runtime.start();
+  spdlog::set_default_logger(previous);
+  ASSERT_TRUE(setup.started);
+  runtime.wait();
+  EXPECT_EQ(runtime.fault(), RuntimeFault::kNone);
+  EXPECT_EQ(faults.calls.load(), 0);
+  EXPECT_EQ(runtime.stats().summary().scans, 20U);
 }
 
 TEST(ScanRuntime, StopRequestEndsTheRun) {
