@@ -92,6 +92,7 @@ int run_command(const RunArgs& args) {
   Progress progress(args.quiet);
   LedgerWriter ledger(args.ledger_path);
   Kpis kpis;
+  RuntimeFault runtime_fault = RuntimeFault::kNone;
   if (args.realtime) {
     RealtimeRunOptions options;
     options.duration_s = *duration_s;
@@ -100,7 +101,9 @@ int run_command(const RunArgs& args) {
     options.lock_memory = args.lock_memory;
     options.cpu_dma_latency_us = args.cpu_dma_latency_us;
     options.hmi_config = args.hmi_config;
-    kpis = run_realtime(options, line, *plant, progress, ledger).kpis;
+    const RealtimeRunResult result = run_realtime(options, line, *plant, progress, ledger);
+    kpis = result.kpis;
+    runtime_fault = result.fault;
   } else {
     RunOptions options;
     options.duration_s = *duration_s;
@@ -135,6 +138,12 @@ int run_command(const RunArgs& args) {
     }
     json << to_json(kpis).dump(2) << '\n';
     spdlog::info("KPIs written to {}", args.json_path);
+  }
+  // A scan runtime that faulted (a stalled scan, overruns in a row) stopped the line in its
+  // safe state: a failed run, so that the service's Restart=on-failure brings it back.
+  if (runtime_fault != RuntimeFault::kNone) {
+    spdlog::error("the scan runtime faulted ({}): exit 4", to_string(runtime_fault));
+    return 4;
   }
   // A run whose books do not balance is a failed run, whatever the throughput.
   return kpis.ledger_balanced && kpis.truth_balanced ? 0 : 3;

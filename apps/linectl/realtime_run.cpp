@@ -160,6 +160,7 @@ RealtimeRunResult run_realtime(const RealtimeRunOptions& options, const LineConf
   result.kpis.plant = plant.name();
   result.kpis.seed = options.seed;
   result.cycle_stats = runtime.stats();
+  result.fault = runtime.fault();
   const CycleStatsSummary stats = result.cycle_stats.summary();
   result.kpis.compute = stats.compute;
   collector.finish(controller, io.fillets_fed(), io.fillets_on_line(), fed_s, elapsed_s, elapsed_s,

@@ -66,7 +66,8 @@ struct RealtimeRunResult {
   double fed_s = 0.0;      // feeding time up to the stop request
   double elapsed_s = 0.0;  // wall time of the whole run, drain included
   bool stopped_by_signal = false;
-  bool drained = false;  // the belts were empty when the run ended
+  bool drained = false;                      // the belts were empty when the run ended
+  RuntimeFault fault = RuntimeFault::kNone;  // the runtime's own fault (stall, overruns, ...)
 };
 
 // Throws std::runtime_error when the runtime cannot start.
