@@ -13,79 +13,18 @@
 #   scripts/deploy_test.sh [BUILD_DIR]        (default build/release)
 set -euo pipefail
 cd "$(dirname "$0")/.."
-start_s=$(date +%s)
 build_dir=${1:-build/release}
-work=build/deploy-test
-root=$work/root
-suite=bookworm
+label="deploy test"
+root=build/deploy-test/root
+# say, fail, build_package, ensure_base, unpack_root, in_root, cleanup_root; work, base, mirror
+source scripts/deploy_common.sh
 
-say() { echo "== deploy test [$(($(date +%s) - start_s)) s]: $*"; }
-fail() {
-  echo "FAILED: deploy test: $*" >&2
-  exit 1
-}
+require_root_and_debootstrap
+trap cleanup_root EXIT
 
-[[ $(id -u) -eq 0 ]] || fail "needs root (debootstrap, chroot and mounts)"
-command -v debootstrap >/dev/null || fail "debootstrap missing (bash scripts/setup.sh)"
-command -v dpkg-shlibdeps >/dev/null || fail "dpkg-shlibdeps missing (apt-get install dpkg-dev)"
-
-# The mirror the host's apt uses (deb822 sources first, then sources.list); the root's apt
-# uses the same one.
-mirror=$(grep -hs -oE '^URIs: *[^ ]*/debian/?$' /etc/apt/sources.list.d/*.sources |
-  sed -E 's/^URIs: *//' | head -1 || true)
-[[ -n $mirror ]] || mirror=$(grep -hs -oE '^deb +[^ ]*/debian/? ' /etc/apt/sources.list |
-  awk '{print $2}' | head -1 || true)
-mirror=${mirror:-http://deb.debian.org/debian}
-mirror=${mirror%/}
-
-mkdir -p "$work/apt-archives/partial"
-
-unmount_root() {
-  for mount_point in var/cache/apt/archives proc; do
-    if mountpoint -q "$root/$mount_point" 2>/dev/null; then umount "$root/$mount_point"; fi
-  done
-}
-cleanup() {
-  unmount_root
-  # Never delete through a mount that is still there (the package cache, /proc).
-  if ! grep -q " $(realpath -m "$root")/" /proc/mounts; then rm -rf "$root"; fi
-}
-trap cleanup EXIT
-
-say "package (cpack DEB) from $build_dir"
-cmake -S . -B "$build_dir" -DCMAKE_INSTALL_PREFIX=/usr >/dev/null
-cmake --build "$build_dir" --target linectl -j "${FL_BUILD_JOBS:-$(nproc)}"
-rm -rf "$build_dir/package"
-(cd "$build_dir" && cpack -G DEB -B package >/dev/null)
-deb=$(ls "$build_dir"/package/fillet-line_*.deb)
-dpkg-deb --field "$deb" Package Version Depends Recommends
-dpkg-deb --contents "$deb" | awk '{print "  " $6}'
-
-base=$work/debian12-minbase-systemd.tar
-if [[ ! -f $base ]]; then
-  say "making the Debian 12 base root from $mirror (cached as $base)"
-  rm -rf "$work/base-root"
-  debootstrap --variant=minbase --include=systemd --cache-dir="$(realpath "$work/apt-archives")" \
-    "$suite" "$work/base-root" "$mirror" >"$work/debootstrap.log" 2>&1 ||
-    fail "debootstrap (log: $work/debootstrap.log)"
-  cat >"$work/base-root/etc/apt/sources.list" <<EOF
-deb $mirror $suite main
-deb $mirror $suite-updates main
-deb ${mirror}-security $suite-security main
-EOF
-  tar -C "$work/base-root" -cf "$base.partial" . && mv "$base.partial" "$base"
-  rm -rf "$work/base-root"
-fi
-
-say "clean root from $base"
-rm -rf "$root"
-mkdir -p "$root"
-tar -C "$root" -xf "$base"
-cp /etc/resolv.conf "$root/etc/resolv.conf"
-mount -t proc proc "$root/proc"
-mount --bind "$work/apt-archives" "$root/var/cache/apt/archives"
-cp "$deb" "$root/tmp/"
-in_root() { chroot "$root" /usr/bin/env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin LANG=C.UTF-8 "$@"; }
+build_package "$build_dir"
+ensure_base
+unpack_root
 
 say "apt install $(basename "$deb") (dependencies resolved in the root)"
 in_root apt-get update -q >/dev/null
