@@ -2,33 +2,15 @@
 
 #include <pthread.h>
 #include <sched.h>
-#include <time.h>
 
-#include <cerrno>
 #include <cstring>
+
+#include "fl/controller/monotonic_clock.hpp"
 
 namespace fl::apps {
 namespace {
 
-constexpr std::int64_t kNsPerS = 1'000'000'000;
 constexpr std::int64_t kProbeRangeNs = 100'000'000;  // 100 ms: beyond any VM tail seen here
-
-std::int64_t to_ns(const timespec& time) {
-  return static_cast<std::int64_t>(time.tv_sec) * kNsPerS + time.tv_nsec;
-}
-
-timespec from_ns(std::int64_t ns) {
-  timespec time{};
-  time.tv_sec = static_cast<time_t>(ns / kNsPerS);
-  time.tv_nsec = static_cast<long>(ns % kNsPerS);
-  return time;
-}
-
-std::int64_t now_ns() {
-  timespec time{};
-  clock_gettime(CLOCK_MONOTONIC, &time);
-  return to_ns(time);
-}
 
 }  // namespace
 
@@ -57,12 +39,10 @@ void LatencyProbe::stop() {
 }
 
 void LatencyProbe::run() noexcept {
-  std::int64_t next_ns = now_ns() + period_ns_;
+  std::int64_t next_ns = monotonic_now_ns() + period_ns_;
   while (!stop_.load(std::memory_order_relaxed)) {
-    const timespec wake = from_ns(next_ns);
-    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &wake, nullptr) == EINTR) {
-    }
-    const std::int64_t latency_ns = now_ns() - next_ns;
+    sleep_until_ns(next_ns);
+    const std::int64_t latency_ns = monotonic_now_ns() - next_ns;
     histogram_.record(latency_ns);
     std::int64_t seen = interval_max_ns_.load(std::memory_order_relaxed);
     while (latency_ns > seen &&
@@ -71,7 +51,7 @@ void LatencyProbe::run() noexcept {
     // Like cyclictest: the next period follows the schedule, not the late wake-up; periods
     // slept through entirely are skipped rather than measured as a burst.
     next_ns += period_ns_;
-    const std::int64_t now = now_ns();
+    const std::int64_t now = monotonic_now_ns();
     if (next_ns <= now) next_ns += ((now - next_ns) / period_ns_ + 1) * period_ns_;
   }
 }

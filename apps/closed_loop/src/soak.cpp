@@ -22,6 +22,35 @@ std::uint64_t count_at_or_beyond(const DurationHistogram& histogram, std::int64_
   return count;
 }
 
+namespace {
+
+// Whose the late scans are, from the latency probe beside the scan.
+std::string late_scan_diagnosis(const SoakRun& run, const SoakCriteria& criteria,
+                                const SoakVerdict& verdict) {
+  const double bound_us = static_cast<double>(criteria.max_wakeup_latency_ns) / 1e3;
+  if (!run.probe_ran) {
+    return "no latency probe ran beside the scan, so the late scans cannot be told the "
+           "machine's or the controller's";
+  }
+  if (run.probe_at_or_beyond_bound > 0) {
+    return fmt::format(
+        "the machine itself is late: a bare thread on the same 10 ms schedule{} woke {} times "
+        "{:.0f} us or more late (worst {:.0f} us), and was late in {} of the {} intervals in "
+        "which the scan was. The tails are the machine's (hypervisor, firmware, kernel), not "
+        "the controller's: measure on the line PC, or tune it (isolated core, C-states)",
+        run.probe_fifo ? " (SCHED_FIFO, one below the scan)" : " (SCHED_OTHER)",
+        run.probe_at_or_beyond_bound, bound_us, static_cast<double>(run.probe_latency.max_ns) / 1e3,
+        verdict.of_which_probe_late, verdict.intervals_with_late_scan);
+  }
+  return fmt::format(
+      "the machine was never late (a bare thread on the same schedule stayed under {:.0f} us, "
+      "worst {:.0f} us) while the scan was: the controller delays its own scans (compute, "
+      "locks, page faults, I/O)",
+      bound_us, static_cast<double>(run.probe_latency.max_ns) / 1e3);
+}
+
+}  // namespace
+
 SoakVerdict evaluate_soak(const SoakRun& run, const SoakCriteria& criteria) {
   SoakVerdict verdict;
   std::vector<std::string>& failures = verdict.failures;
@@ -83,29 +112,8 @@ SoakVerdict evaluate_soak(const SoakRun& run, const SoakCriteria& criteria) {
       ++verdict.of_which_probe_late;
     }
   }
-  const double bound_us = static_cast<double>(criteria.max_wakeup_latency_ns) / 1e3;
-  if (verdict.late_scans == 0) {
-    verdict.deadline_diagnosis.clear();
-  } else if (!run.probe_ran) {
-    verdict.deadline_diagnosis =
-        "no latency probe ran beside the scan, so the late scans cannot be told the machine's "
-        "or the controller's";
-  } else if (run.probe_at_or_beyond_bound > 0) {
-    verdict.deadline_diagnosis = fmt::format(
-        "the machine itself is late: a bare thread on the same 10 ms schedule{} woke {} times "
-        "{:.0f} us or more late (worst {:.0f} us), and was late in {} of the {} intervals in "
-        "which the scan was. The tails are the machine's (hypervisor, firmware, kernel), not "
-        "the controller's: measure on the line PC, or tune it (isolated core, C-states)",
-        run.probe_fifo ? " (SCHED_FIFO, one below the scan)" : " (SCHED_OTHER)",
-        run.probe_at_or_beyond_bound, bound_us, static_cast<double>(run.probe_latency.max_ns) / 1e3,
-        verdict.of_which_probe_late, verdict.intervals_with_late_scan);
-  } else {
-    verdict.deadline_diagnosis = fmt::format(
-        "the machine was never late (a bare thread on the same schedule stayed under {:.0f} us, "
-        "worst {:.0f} us) while the scan was: the controller delays its own scans (compute, "
-        "locks, page faults, I/O)",
-        bound_us, static_cast<double>(run.probe_latency.max_ns) / 1e3);
-  }
+  if (verdict.late_scans > 0)
+    verdict.deadline_diagnosis = late_scan_diagnosis(run, criteria, verdict);
 
   // Fillets.
   const Kpis& kpis = run.kpis;

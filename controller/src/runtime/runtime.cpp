@@ -17,6 +17,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "fl/controller/monotonic_clock.hpp"
+
 namespace fl {
 
 namespace {
@@ -25,24 +27,6 @@ namespace {
 static_assert(std::atomic<std::int64_t>::is_always_lock_free);
 static_assert(std::atomic<std::uint64_t>::is_always_lock_free);
 static_assert(std::atomic<RuntimeFault>::is_always_lock_free);
-
-constexpr std::int64_t kNsPerSecond = 1'000'000'000;
-
-std::int64_t monotonic_now_ns() noexcept {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<std::int64_t>(now.tv_sec) * kNsPerSecond + now.tv_nsec;
-}
-
-// Absolute sleep: a late wake-up does not shift later deadlines, and a signal only restarts
-// the wait for the same instant.
-void sleep_until_ns(std::int64_t wakeup_ns) noexcept {
-  timespec wakeup{};
-  wakeup.tv_sec = static_cast<time_t>(wakeup_ns / kNsPerSecond);
-  wakeup.tv_nsec = static_cast<long>(wakeup_ns % kNsPerSecond);
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &wakeup, nullptr) == EINTR) {
-  }
-}
 
 // Touch the stack the cycle will use, so that its first page faults happen before the first
 // scan (with mlockall(MCL_FUTURE) the touched pages then stay resident).
