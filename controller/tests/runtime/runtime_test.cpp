@@ -232,10 +232,11 @@ TEST(ScanRuntime, ConsecutiveOverrunsRaiseTheFaultOnceAndStop) {
 }
 
 // The tenth scan blocks for 60 periods; the watchdog must act long before it returns, from
-// its own thread, and the scan must not write its outputs afterwards.
+// its own thread, and the scan must not write its outputs afterwards. The 50 ms limit stays
+// above the scheduling stalls a loaded 2-core CI machine shows (up to ~22 ms in the soak).
 TEST(ScanRuntime, WatchdogCatchesAStalledScan) {
   constexpr std::int64_t kPeriodNs = 5 * kMs;
-  constexpr std::uint32_t kWatchdogPeriods = 4;
+  constexpr std::uint32_t kWatchdogPeriods = 10;
   constexpr std::int64_t kBlockNs = 60 * kPeriodNs;
 
   class BlockingLogic final : public ScanLogic {
@@ -282,12 +283,12 @@ TEST(ScanRuntime, WatchdogStaysQuietWhileScansRunAndAfterTheEnd) {
   ScanRuntime runtime(io, logic,
                       RuntimeOptions{.period_ns = 2 * kMs,
                                      .max_scans = 50,
-                                     .watchdog_periods = 3,
+                                     .watchdog_periods = 25,  // 50 ms: above CI load stalls
                                      .on_fault = faults.callback()});
   ASSERT_TRUE(runtime.start().started);
-  // Leave wait() late: a finished scan thread is not a stalled one.
+  // Leave wait() late, three watchdog limits: a finished scan thread is not a stalled one.
   while (runtime.running()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  std::this_thread::sleep_for(std::chrono::milliseconds(150));
   runtime.wait();
   EXPECT_EQ(runtime.fault(), RuntimeFault::kNone);
   EXPECT_EQ(faults.calls.load(), 0);
@@ -311,12 +312,14 @@ class SlowStartSink final : public spdlog::sinks::base_sink<std::mutex> {
 };
 
 TEST(ScanRuntime, WatchdogDoesNotCountASlowStartUpAsAStall) {
-  constexpr int kWatchdogPeriods = 3;  // 6 ms at 2 ms periods
-  // start() stalls 10 watchdog limits before it releases the scan: before the fix the
+  // 50 ms at 2 ms periods: above the scheduling stalls of a loaded 2-core CI machine, which
+  // made a 6 ms limit fault this test mid-run once.
+  constexpr int kWatchdogPeriods = 25;
+  // start() stalls 4 watchdog limits before it releases the scan: before the fix the
   // watchdog, already running, faulted the runtime "after 0 scans" (seen under qemu at boot).
   const std::shared_ptr<spdlog::logger> previous = spdlog::default_logger();
   spdlog::set_default_logger(std::make_shared<spdlog::logger>(
-      "slow_start", std::make_shared<SlowStartSink>(10 * kWatchdogPeriods * 2 * kMs)));
+      "slow_start", std::make_shared<SlowStartSink>(4 * kWatchdogPeriods * 2 * kMs)));
   CopyingIo io;
   EchoLogic logic;
   FaultRecord faults;
