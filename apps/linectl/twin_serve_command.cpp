@@ -21,6 +21,7 @@
 #include "fl/apps/closed_loop.hpp"
 #include "fl/controller/config_loader.hpp"
 #include "fl/controller/line_controller.hpp"
+#include "fl/controller/monotonic_clock.hpp"
 #include "fl/controller/runtime.hpp"
 #include "fl/drivers/dds/line_io.hpp"
 #include "fl/drivers/dds/line_output.hpp"
@@ -45,12 +46,6 @@ constexpr std::int64_t kCommandStaleNs = 100'000'000;
 // After the controller has stopped the line (every drive disabled), fillets still on the
 // belts stay there; wait this long for the plant to report them gone before ending the run.
 constexpr std::int64_t kStoppedSettleNs = 1'000'000'000;
-
-std::int64_t monotonic_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
 
 void sleep_until(std::int64_t time_ns) {
   timespec ts{};
@@ -164,7 +159,7 @@ int twin_serve_command(const TwinServeArgs& args) {
     published_sequence[c] = plant_in.cameras[c].sequence;
   }
 
-  const std::int64_t start_ns = monotonic_ns() + kPeriodNs;
+  const std::int64_t start_ns = monotonic_now_ns() + kPeriodNs;
   // Frame times are on the plant's clock; the controller's is CLOCK_MONOTONIC of this host.
   const std::int64_t offset_ns = start_ns - plant_in.time_ns;
   const auto limit_ns = static_cast<std::int64_t>((times->duration_s + times->drain_s) * 1e9);
@@ -180,7 +175,7 @@ int twin_serve_command(const TwinServeArgs& args) {
 
   for (std::uint64_t tick = 0; !g_twin_interrupted.load(); ++tick) {
     sleep_until(scheduled_ns);
-    const std::int64_t woke_ns = monotonic_ns();
+    const std::int64_t woke_ns = monotonic_now_ns();
     lateness.record(woke_ns - scheduled_ns);
     ++stats.ticks;
     if (woke_ns - scheduled_ns > kPeriodNs) ++stats.late_ticks;
@@ -233,7 +228,7 @@ int twin_serve_command(const TwinServeArgs& args) {
 
     // Next tick on the absolute schedule; after a late wake-up, the next one in the future.
     scheduled_ns += kPeriodNs;
-    const std::int64_t now_ns = monotonic_ns();
+    const std::int64_t now_ns = monotonic_now_ns();
     if (now_ns > scheduled_ns) {
       const std::int64_t behind = (now_ns - scheduled_ns) / kPeriodNs;
       stats.skipped_ticks += static_cast<std::uint64_t>(behind);

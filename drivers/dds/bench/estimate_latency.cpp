@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "fl/controller/monotonic_clock.hpp"
 #include "fl/drivers/dds/convert.hpp"
 #include "fl/drivers/dds/entity.hpp"
 #include "fl/drivers/dds/line_output.hpp"
@@ -31,12 +32,6 @@ namespace {
 
 // Domain of its own, away from the tests' 11..42.
 constexpr dds_domainid_t kDomain = 77;
-
-std::int64_t monotonic_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
 
 fl::CameraFrame full_frame(std::uint32_t sequence) {
   fl::CameraFrame frame;
@@ -58,7 +53,7 @@ void publish_loop(const dds::Participant& participant, long samples, long interv
   auto next = std::chrono::steady_clock::now();
   for (long n = 1; n <= samples + warmup; ++n) {
     fl::CameraFrame frame = full_frame(static_cast<std::uint32_t>(n));
-    frame.frame_time_ns = monotonic_ns();
+    frame.frame_time_ns = fl::monotonic_now_ns();
     publisher.publish(fl::CameraId::kOrientation, frame);
     next += std::chrono::microseconds(interval_us);
     std::this_thread::sleep_until(next);
@@ -85,14 +80,15 @@ Result take_loop(const dds::Participant& participant, long samples, long warmup)
   void* pointer = &sample;
   dds_sample_info_t info{};
   std::uint32_t last = 0;
-  const std::int64_t give_up_ns = monotonic_ns() + 120'000'000'000;  // 2 min
-  while (last < static_cast<std::uint32_t>(samples + warmup) && monotonic_ns() < give_up_ns) {
+  const std::int64_t give_up_ns = fl::monotonic_now_ns() + 120'000'000'000;  // 2 min
+  while (last < static_cast<std::uint32_t>(samples + warmup) &&
+         fl::monotonic_now_ns() < give_up_ns) {
     if (dds_waitset_wait(waitset, nullptr, 0, DDS_MSECS(500)) <= 0) {
       if (last > 0) break;  // the publisher finished
       continue;
     }
     while (dds_take(reader.get(), &pointer, &info, 1, 1) == 1) {
-      const std::int64_t now = monotonic_ns();
+      const std::int64_t now = fl::monotonic_now_ns();
       if (!info.valid_data) continue;
       if (sample.frame_sequence > last + 1) result.superseded += sample.frame_sequence - last - 1;
       last = sample.frame_sequence;

@@ -5,14 +5,10 @@
 #include <bit>
 #include <ctime>
 
+#include "fl/controller/monotonic_clock.hpp"
+
 namespace fl::drivers::dds {
 namespace {
-
-std::int64_t monotonic_ns() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
 
 // Log the 1st, 2nd, 4th, 8th ... occurrence: a flooding peer cannot flood the log, and the
 // count in the message still says how bad it is.
@@ -165,7 +161,7 @@ void DdsCameraInput::accept(const fl_CameraEstimates& sample, const dds_sample_i
   slot.frames.publish();
   slot.instance.store(info.instance_handle, std::memory_order_relaxed);
   slot.publication.store(info.publication_handle, std::memory_order_relaxed);
-  slot.last_arrival_ns.store(monotonic_ns(), std::memory_order_relaxed);
+  slot.last_arrival_ns.store(monotonic_now_ns(), std::memory_order_relaxed);
   slot.frames_accepted.fetch_add(1, std::memory_order_relaxed);
   slot.delivered.store(true, std::memory_order_release);
   slot.deadline_missed.store(false, std::memory_order_release);
@@ -207,7 +203,7 @@ void DdsCameraInput::on_deadline_missed(dds_entity_t /*reader*/,
   // every camera whose last frame is older than the deadline.
   const std::int64_t deadline_ns =
       kEstimateDeadlinePeriods * self.options_.slowest_camera_period_ns;
-  const std::int64_t now_ns = monotonic_ns();
+  const std::int64_t now_ns = monotonic_now_ns();
   for (std::size_t c = 0; c < kCameraCount; ++c) {
     CameraSlot& slot = self.slots_[c];
     if (!slot.delivered.load(std::memory_order_acquire)) continue;

@@ -5,16 +5,11 @@
 #include <bit>
 #include <ctime>
 
+#include "fl/controller/monotonic_clock.hpp"
 #include "fl/drivers/dds/convert.hpp"
 
 namespace fl::drivers::dds {
 namespace {
-
-std::int64_t monotonic_ns() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
 
 Listener data_listener(void* self, dds_on_data_available_fn data) {
   Listener listener = make_listener(self);
@@ -75,7 +70,7 @@ void DdsSensorInput::on_sensors(dds_entity_t reader, void* arg) {
     self.sensors_.back() = self.sensors_sample_;
     self.sensors_.publish();
     self.sensors_accepted_.fetch_add(1, std::memory_order_relaxed);
-    self.last_sensors_arrival_ns_.store(monotonic_ns(), std::memory_order_release);
+    self.last_sensors_arrival_ns_.store(monotonic_now_ns(), std::memory_order_release);
   }
 }
 

@@ -9,18 +9,10 @@
 #include <cstring>
 #include <ctime>
 
+#include "fl/controller/monotonic_clock.hpp"
 #include "fl/drivers/dds/convert.hpp"
 
 namespace fl::drivers::dds {
-namespace {
-
-std::int64_t monotonic_ns() noexcept {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
-
-}  // namespace
 
 DdsLineOutput::DdsLineOutput(const Participant& participant, LineOutputOptions options)
     : options_(options),
@@ -124,7 +116,7 @@ void DdsLineOutput::record_latency(const FrameStamps& frames) {
 }
 
 void DdsLineOutput::publish_status(const Snapshot& snapshot) {
-  const std::int64_t now_ns = monotonic_ns();
+  const std::int64_t now_ns = monotonic_now_ns();
   const bool changed = !status_sent_ || snapshot.out.state != last_state_ ||
                        snapshot.out.active_faults != last_faults_;
   if (!changed && now_ns - last_status_ns_ < options_.status_period_ns) return;

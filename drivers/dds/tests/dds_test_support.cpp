@@ -9,13 +9,9 @@
 #include <cstdlib>
 #include <thread>
 
-namespace fl::drivers::dds::test {
+#include "fl/controller/monotonic_clock.hpp"
 
-std::int64_t monotonic_ns() {
-  timespec ts{};
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000 + ts.tv_nsec;
-}
+namespace fl::drivers::dds::test {
 
 CameraFrame make_frame(CameraId camera, std::uint32_t sequence, std::int64_t frame_time_ns) {
   CameraFrame frame;

@@ -10,11 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "fl/controller/monotonic_clock.hpp"
 #include "fl/controller/process_image.hpp"
 
 namespace fl::drivers::dds::test {
-
-std::int64_t monotonic_ns();
 
 // The frame a camera sends with `sequence`: count = sequence % 9 (0..8, every fill level
 // of the frame), every field a distinct function of camera, sequence and slot.

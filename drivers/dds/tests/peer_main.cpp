@@ -19,6 +19,7 @@
 #include <thread>
 
 #include "dds_test_support.hpp"
+#include "fl/controller/monotonic_clock.hpp"
 #include "fl/drivers/dds/camera_input.hpp"
 #include "fl/drivers/dds/line_output.hpp"
 
@@ -60,7 +61,7 @@ int publish(dds_domainid_t domain, int camera, int period_ms, long frames,
   auto next = std::chrono::steady_clock::now();
   for (long n = 1; frames == 0 || n <= frames; ++n) {
     publisher->publish(
-        cam, dds::test::make_frame(cam, static_cast<std::uint32_t>(n), dds::test::monotonic_ns()));
+        cam, dds::test::make_frame(cam, static_cast<std::uint32_t>(n), fl::monotonic_now_ns()));
     next += std::chrono::milliseconds(period_ms);
     std::this_thread::sleep_until(next);
   }

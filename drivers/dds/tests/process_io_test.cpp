@@ -12,6 +12,7 @@
 
 #include "dds_test_support.hpp"
 #include "fl/controller/line_controller.hpp"
+#include "fl/controller/monotonic_clock.hpp"
 #include "fl/drivers/dds/camera_input.hpp"
 #include "fl/drivers/dds/line_io.hpp"
 #include "fl/drivers/dds/line_output.hpp"
@@ -45,7 +46,7 @@ TEST(DdsProcessIo, LineIoParticipantGoneOpensTheChainAndTheLineStopsInThatScan) 
   std::uint64_t scan = 0;
   // One scan as the runtime runs it, on CLOCK_MONOTONIC (the clock the arrival stamps use).
   const auto run_scan = [&] {
-    const std::int64_t now_ns = test::monotonic_ns();
+    const std::int64_t now_ns = monotonic_now_ns();
     in.time_ns = now_ns;
     io.read(now_ns, in);
     controller.update(in, out);

@@ -7,6 +7,7 @@
 #include <chrono>
 
 #include "dds_test_support.hpp"
+#include "fl/controller/monotonic_clock.hpp"
 #include "fl/drivers/dds/camera_input.hpp"
 
 namespace fl::drivers::dds {
@@ -51,7 +52,7 @@ TEST(DdsTwoProcesses, EstimatesFromAnotherProcessArriveIntact) {
   EXPECT_GE(intact, static_cast<std::uint32_t>(kFrames / 4));  // the 1 ms poll sees most
   EXPECT_EQ(input.counters().rejected_total(), 0U);
   // The frame's exposure time is the peer's CLOCK_MONOTONIC: the same clock on one host.
-  EXPECT_LT(test::monotonic_ns() - in.cameras[index(CameraId::kMultilane1)].frame_time_ns,
+  EXPECT_LT(monotonic_now_ns() - in.cameras[index(CameraId::kMultilane1)].frame_time_ns,
             5'000'000'000);
 }
 
@@ -83,7 +84,7 @@ TEST(DdsTwoProcesses, KilledPeerLosesLivelinessWithinTheLease) {
       << peer.output();
   ASSERT_TRUE(input.health(CameraId::kPosition).writer_alive);
   peer.kill_now();
-  const std::int64_t killed_at = test::monotonic_ns();
+  const std::int64_t killed_at = monotonic_now_ns();
   // Two paths mark the writer gone: a last sample whose instance is no longer alive (data
   // listener) and the lease expiry (liveliness listener). Either may come first on a loaded
   // machine, so wait for both.
@@ -93,7 +94,7 @@ TEST(DdsTwoProcesses, KilledPeerLosesLivelinessWithinTheLease) {
                input.counters().liveliness_lost >= 1;
       },
       5s));
-  const std::int64_t lost_after_ns = test::monotonic_ns() - killed_at;
+  const std::int64_t lost_after_ns = monotonic_now_ns() - killed_at;
   // The writer's lease is 3 periods of its 20 ms camera: 60 ms. Cyclone checks leases on
   // its own timer, so allow a second on a loaded machine; without liveliness it would take
   // the participant's 10 s lease.
