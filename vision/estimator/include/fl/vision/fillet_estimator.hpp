@@ -154,13 +154,17 @@ class FilletEstimator {
   [[nodiscard]] int downscale_factor() const { return downscale_; }
 
  private:
-  BlobResult measure_blob(const std::vector<cv::Point>& contour) const;
-  void flag_close_blobs(FrameResult& result, double work_mm_per_px);
+  BlobResult measure_blob(const std::vector<cv::Point>& contour);
+  void flag_close_blobs(FrameResult& result, const cv::Rect& foreground);
 
   BeltCalibration calibration_;
   EstimatorParams params_;
   int downscale_ = 1;
   cv::Matx33d work_to_belt_;  // working-image pixel -> belt mm (no distortion case)
+  // Structuring elements, built once for the working scale.
+  cv::Mat interior_erosion_;  // ~3 mm ellipse
+  cv::Mat gap_dilation_;      // min_gap_mm / 2 ellipse
+  int gap_radius_px_ = 1;
   // Reused buffers.
   cv::Mat work_bgr_;
   cv::Mat chroma_;
@@ -168,6 +172,11 @@ class FilletEstimator {
   cv::Mat mask_;
   cv::Mat scratch_;
   cv::Mat labels_;
+  cv::Mat interior_;
+  cv::Mat eroded_;
+  cv::Mat grey_box_;
+  cv::Mat fine_;
+  cv::Mat coarse_;
 };
 
 }  // namespace fl::vision
