@@ -144,6 +144,7 @@ int record_twin(const RecordArgs& args, double duration_s) {
       {"seed", std::to_string(args.seed)},
       {"duration_s", std::to_string(duration_s)},
       {"frame_size_px", std::to_string(args.width_px) + "x" + std::to_string(args.height_px)},
+      {"sensor_mount", args.sensor_mount},
       {"latency_ms", std::to_string(args.latency_ms)}};
   rec::RecordingWriter writer(args.out, settings);
   writer.attach_line_config(read_text(config_file));
@@ -163,6 +164,8 @@ int record_twin(const RecordArgs& args, double duration_s) {
     camera_settings.width_px = args.width_px;
     camera_settings.height_px = args.height_px;
     camera_settings.field_along_travel_mm = static_cast<double>(mount.field_of_view_mm);
+    camera_settings.mount = args.sensor_mount == "along" ? rec::SensorMount::kLongSideAlongTravel
+                                                         : rec::SensorMount::kLongSideAcrossTravel;
     camera_settings.belt.grain_amplitude = args.belt_grain;
     camera_settings.imaging.noise_sigma = args.noise_sigma;
     camera_settings.seed = args.seed * 1000 + index(*camera);
@@ -343,6 +346,10 @@ CLI::App* add_record_subcommand(CLI::App& app, RecordArgs& args) {
   record->add_option("--width", args.width_px, "twin frame width, px")->check(CLI::Range(64, 4096));
   record->add_option("--height", args.height_px, "twin frame height, px")
       ->check(CLI::Range(48, 4096));
+  record
+      ->add_option("--sensor-mount", args.sensor_mount,
+                   "twin cameras: the sensor's long side across the belt (whole width) or along")
+      ->check(CLI::IsMember({"across", "along"}));
   record->add_option("--noise", args.noise_sigma, "twin sensor noise sigma, grey levels")
       ->check(CLI::Range(0.0, 50.0));
   record->add_option("--belt-grain", args.belt_grain, "twin belt texture amplitude, grey levels")

@@ -1,5 +1,6 @@
 #include "fl/vision/record/twin_frame_source.hpp"
 
+#include <numbers>
 #include <stdexcept>
 
 namespace fl::vision::record {
@@ -31,9 +32,12 @@ TwinFrameSource::TwinFrameSource(std::shared_ptr<const render::FilletRenderer> r
       !(settings_.field_along_travel_mm > 0.0)) {
     throw std::invalid_argument("twin camera " + camera_name + ": size and field must be positive");
   }
+  const bool across = settings_.mount == SensorMount::kLongSideAcrossTravel;
+  const int px_along_travel = across ? settings_.height_px : settings_.width_px;
   camera_ = render::make_top_down_camera(
       settings_.width_px, settings_.height_px,
-      settings_.field_along_travel_mm / static_cast<double>(settings_.width_px));
+      settings_.field_along_travel_mm / static_cast<double>(px_along_travel),
+      across ? 0.5 * std::numbers::pi : 0.0);
   calibration_.camera_name = std::move(camera_name);
   calibration_.image_width_px = settings_.width_px;
   calibration_.image_height_px = settings_.height_px;
@@ -61,7 +65,8 @@ std::optional<SourceFrame> TwinFrameSource::next() {
 std::string TwinFrameSource::describe() const {
   return "twin camera " + calibration_.camera_name + " (" + std::to_string(settings_.width_px) +
          " x " + std::to_string(settings_.height_px) + " px over " +
-         std::to_string(settings_.field_along_travel_mm) + " mm)";
+         std::to_string(settings_.field_along_travel_mm) + " mm along travel, long side " +
+         (settings_.mount == SensorMount::kLongSideAcrossTravel ? "across" : "along") + ")";
 }
 
 }  // namespace fl::vision::record

@@ -156,5 +156,57 @@ TEST(TwinFrameSource, RendersTheSceneTheEstimatorMeasures) {
   EXPECT_TRUE(identical(again.next()->bgr, frame->bgr));
 }
 
+// A 4:3 camera turned so that its long side runs across the belt: 300 mm along travel on its
+// 480 rows gives 0.625 mm/px and 640 columns of it, 400 mm, the line's whole belt. A fillet
+// near the belt's edge is wholly in view there and cut by the image's side with the sensor's
+// long side along travel (300 mm on 640 columns: 225 mm across).
+TEST(TwinFrameSource, LongSideAcrossTravelSeesTheWholeBeltWidth) {
+  auto renderer = std::make_shared<render::FilletRenderer>();
+  StaticScene scene;
+  render::FilletInstance fillet;
+  fillet.x_mm = 10.0;
+  fillet.y_mm = 140.0;     // 72 mm wide, lying along travel: 104..176 mm across, beyond 112.5
+  fillet.angle_rad = 0.1;  // heading a little to the left of travel
+  fillet.hand = Hand::kLeft;
+  fillet.side = SideUp::kSkin;
+  scene.fillets_.push_back(fillet);
+
+  TwinCameraSettings settings;  // 640 x 480, 300 mm along travel
+  settings.mount = SensorMount::kLongSideAcrossTravel;
+  TwinFrameSource across(renderer, scene, settings, "orientation");
+  const cv::Matx33d& to_belt = across.calibration().image_to_belt;
+  const auto belt_at = [&](double u, double v) {
+    const cv::Vec3d p = to_belt * cv::Vec3d(u, v, 1.0);
+    return cv::Point2d(p[0] / p[2], p[1] / p[2]);
+  };
+  // Pixel centres: the outer edges lie half a pixel (0.3125 mm) beyond the corner centres.
+  const cv::Point2d top_left = belt_at(-0.5, -0.5);
+  const cv::Point2d bottom_right = belt_at(639.5, 479.5);
+  EXPECT_NEAR(std::abs(top_left.x - bottom_right.x), 300.0, 1e-6);
+  EXPECT_NEAR(std::abs(top_left.y - bottom_right.y), 400.0, 1e-6);
+  const auto frame = across.next();
+  ASSERT_TRUE(frame.has_value());
+  ASSERT_EQ(across.last_truth().size(), 1U);
+  EXPECT_TRUE(across.last_truth()[0].fully_visible);
+
+  FilletEstimator estimator(across.calibration());
+  const CameraFrame measured = estimator.estimate(frame->bgr, frame->time_ns, 1).to_camera_frame();
+  ASSERT_EQ(measured.count, 1);
+  const FilletEstimate& e = measured.estimates[0];
+  // 0.625 mm/px: a few pixels of pose error at most; the heading is in belt coordinates, so
+  // the quarter turn of the sensor must not show in it.
+  EXPECT_NEAR(e.x_mm, 10.0F, 3.0F);
+  EXPECT_NEAR(e.y_mm, 140.0F, 3.0F);
+  EXPECT_NEAR(e.angle_rad, 0.1F, 0.05F);
+  EXPECT_EQ(e.hand, Hand::kLeft);
+  EXPECT_EQ(e.side, SideUp::kSkin);
+
+  settings.mount = SensorMount::kLongSideAlongTravel;
+  TwinFrameSource along(renderer, scene, settings, "orientation");
+  ASSERT_TRUE(along.next().has_value());
+  ASSERT_EQ(along.last_truth().size(), 1U);
+  EXPECT_FALSE(along.last_truth()[0].fully_visible);
+}
+
 }  // namespace
 }  // namespace fl::vision::record

@@ -31,17 +31,24 @@ class TwinScene {
   [[nodiscard]] virtual std::vector<render::FilletInstance> fillets() const = 0;
 };
 
+// Which side of the sensor runs along the belt. With the long side across, a 4:3 camera that
+// sees config/line.yaml's 300 mm along travel sees 400 mm across: the line's whole belt, so
+// fillets lying side by side are wholly in view. With it along, it sees 225 mm across.
+enum class SensorMount { kLongSideAlongTravel, kLongSideAcrossTravel };
+
 struct TwinCameraSettings {
   int width_px = 640;
   int height_px = 480;
   double field_along_travel_mm = 300.0;  // config/line.yaml's field_of_view_mm
+  SensorMount mount = SensorMount::kLongSideAlongTravel;
   render::BeltAppearance belt;
   render::ImagingConditions imaging;
   std::uint64_t seed = 1;  // the frame's texture and noise seed is seed + sequence
   int supersampling = 2;
 };
 
-// Straight top-down camera (render::make_top_down_camera) over the field; its calibration is
+// Straight top-down camera (render::make_top_down_camera) over the field, turned a quarter
+// turn for SensorMount::kLongSideAcrossTravel (travel runs up the image); its calibration is
 // the exact inverse of the renderer's homography, as fl_calibrate would measure it.
 class TwinFrameSource final : public FrameSource {
  public:
