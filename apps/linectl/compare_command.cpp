@@ -5,6 +5,7 @@
 #include <chrono>
 #include <ctime>
 #include <fstream>
+#include <memory>
 #include <optional>
 
 #include "cli_support.hpp"
@@ -50,12 +51,21 @@ std::optional<WorkbenchInputs> load_inputs(const CompareArgs& args) {
   inputs.common.base_spec = dem::load_model_spec(dem_config);
   inputs.common.sub_particle_radius_m = args.radius_mm * 1e-3;
   inputs.common.thread_count = args.threads;
-  if (inputs.dataset.experiment != ExperimentType::kCompress) {
-    spdlog::error("{}: the twin does not reproduce {} datasets yet (compress only)", args.dataset,
-                  to_string(inputs.dataset.experiment));
+  if (inputs.dataset.experiment != ExperimentType::kCompress &&
+      inputs.dataset.experiment != ExperimentType::kSlide) {
+    spdlog::error("{}: the twin does not reproduce {} datasets yet (compress and slide only)",
+                  args.dataset, to_string(inputs.dataset.experiment));
     return std::nullopt;
   }
   return inputs;
+}
+
+// The twin of the dataset's experiment (load_inputs lets only these through).
+std::unique_ptr<TrialModel> make_twin(const WorkbenchInputs& inputs) {
+  if (inputs.dataset.experiment == ExperimentType::kSlide) {
+    return std::make_unique<TwinSlideModel>(inputs.common);
+  }
+  return std::make_unique<TwinCompressModel>(inputs.common);
 }
 
 fs::path out_folder(const CompareArgs& args, const char* prefix) {
@@ -87,11 +97,15 @@ CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args) {
   CLI::App* dataset = app.add_subcommand("dataset", "measurement dataset tools");
   dataset->require_subcommand(1);
   CLI::App* generate = dataset->add_subcommand(
-      "generate", "write a synthetic compress dataset with a hidden effect");
+      "generate", "write a synthetic compress or slide dataset with a hidden effect");
   generate->add_option("--out", args.out, "dataset folder to write")->required();
+  generate->add_option("--experiment", args.experiment, "compress or slide")
+      ->check(CLI::IsMember({"compress", "slide"}));
   generate->add_option("--effect", args.effect, "random, none, or an effect law");
   generate->add_option("--seed", args.seed, "random seed (effect, parameters, noise)");
   generate->add_option("--force-noise-n", args.force_noise_n, "1-sigma force noise in N")
+      ->check(CLI::Range(0.0, 10.0));
+  generate->add_option("--angle-noise-deg", args.angle_noise_deg, "slide: 1-sigma angle noise")
       ->check(CLI::Range(0.0, 10.0));
   return dataset;
 }
@@ -100,7 +114,9 @@ int generate_command(const GenerateArgs& args) {
   GeneratorOptions options;
   options.seed = args.seed;
   options.effect = args.effect;
+  options.experiment = *experiment_from_string(args.experiment);  // checked by the option
   options.force_noise_n = args.force_noise_n;
+  options.angle_noise_deg = args.angle_noise_deg;
   options.common.base_spec = dem::load_model_spec(default_config("dem.yaml"));
   const GeneratedDataset made = generate_dataset(options);
   write_dataset(made.dataset, args.out);
@@ -114,7 +130,8 @@ int generate_command(const GenerateArgs& args) {
 int diagnose_command(const CompareArgs& args) {
   const std::optional<WorkbenchInputs> inputs = load_inputs(args);
   if (!inputs) return 2;
-  const Diagnosis diagnosis = diagnose(inputs->dataset, inputs->common, compress_candidates());
+  const Diagnosis diagnosis =
+      diagnose(inputs->dataset, inputs->common, candidates_for(inputs->dataset.experiment));
   const fs::path out = out_folder(args, "diagnose_");
   fs::create_directories(out);
   std::ofstream(out / "diagnosis.json") << diagnosis_json(diagnosis) << "\n";
@@ -128,7 +145,18 @@ int diagnose_command(const CompareArgs& args) {
   }
   spdlog::info("{}", diagnosis.verdict);
   const HiddenEffect effect = proposed_effect(diagnosis);
-  if (!effect.law.empty()) {
+  if (!effect.law.empty() && inputs->dataset.experiment == ExperimentType::kSlide) {
+    std::string snippet = "      - law: " + effect.law + "\n";
+    for (const auto& [key, value] : effect.parameters) {
+      snippet += fmt::format("        {}: {:.6g}\n", key, value);
+    }
+    spdlog::info(
+        "to add it, put this in the contact_laws of every fillet-equipment interaction in "
+        "config/dem.yaml (static_kinetic_friction in place of coulomb, with the coulomb's "
+        "friction_coefficient as kinetic_friction_coefficient; wet_film before the friction "
+        "law; rolling_resistance after it):\n{}",
+        snippet);
+  } else if (!effect.law.empty()) {
     std::string snippet = "    bond_law:\n      law: " + effect.law + "\n";
     for (const auto& [key, value] : effect.parameters) {
       snippet += fmt::format("      {}: {:.6g}\n", key, value);
@@ -150,7 +178,7 @@ int compare_command(const CompareArgs& args) {
   const std::optional<WorkbenchInputs> inputs = load_inputs(args);
   if (!inputs) return 2;
   const Dataset& dataset = inputs->dataset;
-  std::unique_ptr<TrialModel> model = std::make_unique<TwinCompressModel>(inputs->common);
+  std::unique_ptr<TrialModel> model = make_twin(*inputs);
   spdlog::info("comparing {} ({} trials, {}) with: {}", dataset.name, dataset.trials.size(),
                to_string(dataset.experiment), model->describe());
   const CompareReport report = compare(dataset, *model);

@@ -6,8 +6,11 @@
 //   linectl diagnose DATASET [--out DIR] [...]
 //     fits each candidate effect the model lacks and says which one explains the failure
 //     (DIR/diagnosis.json), with the config/dem.yaml change that adds it.
-//   linectl dataset generate --out DIR [--effect random|none|LAW] [--seed N]
-//     a synthetic compress dataset with a hidden effect; the truth in DIR.truth.yaml.
+//   linectl dataset generate --out DIR [--experiment compress|slide]
+//                            [--effect random|none|LAW] [--seed N]
+//     a synthetic compress or slide dataset with a hidden effect; the truth in DIR.truth.yaml.
+// compare and diagnose take compress and slide datasets (the twin and the candidate effects
+// follow the dataset's experiment).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -27,8 +30,10 @@ struct CompareArgs {
 struct GenerateArgs {
   std::string out;
   std::string effect = "random";
+  std::string experiment = "compress";
   std::uint64_t seed = 1;
   double force_noise_n = 0.01;
+  double angle_noise_deg = 0.3;
 };
 
 CLI::App* add_compare_subcommand(CLI::App& app, CompareArgs& args);

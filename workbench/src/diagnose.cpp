@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -17,23 +18,48 @@
 namespace fl::workbench {
 namespace {
 
-constexpr std::string_view kChannel = "force";
+// What the experiment type decides: the channel judged, the twin that runs it, and where a
+// candidate effect goes in the model (compress: the bond law; slide: the fillet-equipment
+// contact chain).
+struct Experiment {
+  std::string_view channel;
+  bool contact_effects = false;
+};
+
+Experiment experiment_of(ExperimentType type) {
+  switch (type) {
+    case ExperimentType::kCompress:
+      return {"force", false};
+    case ExperimentType::kSlide:
+      return {"onset_angle", true};
+    default:
+      throw std::invalid_argument("diagnose handles compress and slide datasets, not " +
+                                  std::string(to_string(type)));
+  }
+}
+
+std::unique_ptr<TrialModel> make_model(ExperimentType type,
+                                       const model_tests::CommonParams& common) {
+  if (type == ExperimentType::kSlide) return std::make_unique<TwinSlideModel>(common);
+  return std::make_unique<TwinCompressModel>(common);
+}
 
 struct Residuals {
   double rss = 0.0;
   std::size_t samples = 0;
 };
 
-// Sum of squared force residuals of a model over the chosen trials.
+// Sum of squared residuals of the judged channel over the chosen trials.
 Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& common,
                     const std::vector<std::size_t>& trials) {
-  TwinCompressModel model(common);
+  const std::string_view channel = experiment_of(dataset.experiment).channel;
+  const std::unique_ptr<TrialModel> model = make_model(dataset.experiment, common);
   Residuals r;
   for (const std::size_t index : trials) {
     const Trial& trial = dataset.trials[index];
-    const Table predicted = model.run(dataset, trial);
-    const std::vector<double>& measured = trial.data.at(kChannel).values_si;
-    const std::vector<double>& modelled = predicted.at(kChannel).values_si;
+    const Table predicted = model->run(dataset, trial);
+    const std::vector<double>& measured = trial.data.at(channel).values_si;
+    const std::vector<double>& modelled = predicted.at(channel).values_si;
     for (std::size_t k = 0; k < measured.size(); ++k) {
       const double e = modelled[k] - measured[k];
       r.rss += e * e;
@@ -63,7 +89,8 @@ struct FitContext {
 };
 
 model_tests::CommonParams with_effect(const model_tests::CommonParams& base,
-                                      const EffectCandidate& candidate, const double* unit_point) {
+                                      const EffectCandidate& candidate, const double* unit_point,
+                                      bool contact_effect) {
   HiddenEffect effect;
   effect.law = candidate.law;
   for (std::size_t p = 0; p < candidate.parameters.size(); ++p) {
@@ -71,7 +98,8 @@ model_tests::CommonParams with_effect(const model_tests::CommonParams& base,
         from_unit(candidate.parameters[p], unit_point[p]);
   }
   model_tests::CommonParams common = base;
-  common.base_spec = with_bond_effect(base.base_spec, effect);
+  common.base_spec = contact_effect ? with_contact_effect(base.base_spec, effect)
+                                    : with_bond_effect(base.base_spec, effect);
   return common;
 }
 
@@ -81,9 +109,12 @@ double objective(unsigned n, const double* x, double* gradient, void* data) {
   auto& context = *static_cast<FitContext*>(data);
   ++context.evaluations;
   try {
-    const double rss = residuals(*context.dataset,
-                                 with_effect(*context.base, *context.candidate, x), *context.trials)
-                           .rss;
+    const double rss =
+        residuals(*context.dataset,
+                  with_effect(*context.base, *context.candidate, x,
+                              experiment_of(context.dataset->experiment).contact_effects),
+                  *context.trials)
+            .rss;
     context.best_rss = std::min(context.best_rss, rss);
     return std::isfinite(rss) ? rss : 1e300;
   } catch (const std::exception& error) {
@@ -100,7 +131,23 @@ CandidateResult fit(const Dataset& dataset, const model_tests::CommonParams& bas
                     const DiagnoseOptions& options) {
   const auto dimensions = static_cast<unsigned>(candidate.parameters.size());
   FitContext context{&dataset, &base, &candidate, &fit_trials};
-  std::vector<double> x(dimensions, 0.5);  // the middle of each (log) range
+  // Start from the best of the middle and the points a quarter in from the corners of the
+  // (log) box: an effect can be flat over much of its range (a stick speed below the contacts'
+  // creep hides any static friction), and a local search started on such a plateau stops
+  // there. 2^d + 1 twin runs over the fit trials.
+  std::vector<double> x(dimensions, 0.5);
+  {
+    double start_rss = objective(dimensions, x.data(), nullptr, &context);
+    for (unsigned corner = 0; corner < (1U << dimensions); ++corner) {
+      std::vector<double> point(dimensions);
+      for (unsigned p = 0; p < dimensions; ++p) point[p] = (corner >> p) & 1U ? 0.75 : 0.25;
+      const double rss = objective(dimensions, point.data(), nullptr, &context);
+      if (rss < start_rss) {
+        start_rss = rss;
+        x = point;
+      }
+    }
+  }
   std::vector<double> lower(dimensions, 0.0);
   std::vector<double> upper(dimensions, 1.0);
   // BOBYQA needs two or more dimensions; one parameter goes to a bounded Nelder-Mead.
@@ -126,7 +173,8 @@ CandidateResult fit(const Dataset& dataset, const model_tests::CommonParams& bas
   for (std::size_t p = 0; p < dimensions; ++p) {
     result.fitted[candidate.parameters[p].name] = from_unit(candidate.parameters[p], x[p]);
   }
-  const model_tests::CommonParams fitted = with_effect(base, candidate, x.data());
+  const model_tests::CommonParams fitted =
+      with_effect(base, candidate, x.data(), experiment_of(dataset.experiment).contact_effects);
   const Residuals all = residuals(dataset, fitted, all_trials);
   result.rss = all.rss;
   result.bic = bic(all.rss, all.samples, dimensions);
@@ -146,21 +194,37 @@ std::vector<EffectCandidate> compress_candidates() {
   };
 }
 
+std::vector<EffectCandidate> slide_candidates() {
+  // Bounds any fillet on any plate stays inside: resting friction 0.1 to 3 (onset 6 to 72 deg)
+  // with contacts counted as resting below 0.1 to 100 mm/s; a film taking none to 95 % of the
+  // friction load; rolling friction over three decades up to 1.
+  return {
+      {"static_kinetic_friction",
+       {{"static_friction_coefficient", 0.1, 3.0, true}, {"stick_speed_m_per_s", 1e-4, 0.1, true}}},
+      {"wet_film", {{"lubrication", 0.0, 0.95, false}}},
+      {"rolling_resistance", {{"rolling_friction", 1e-3, 1.0, true}}},
+  };
+}
+
+std::vector<EffectCandidate> candidates_for(ExperimentType type) {
+  if (type == ExperimentType::kSlide) return slide_candidates();
+  if (type == ExperimentType::kCompress) return compress_candidates();
+  throw std::invalid_argument("no effect candidates for " + std::string(to_string(type)) +
+                              " datasets");
+}
+
 Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base,
                    const std::vector<EffectCandidate>& candidates, const DiagnoseOptions& options) {
-  if (dataset.experiment != ExperimentType::kCompress) {
-    throw std::invalid_argument("diagnose handles compress datasets so far, not " +
-                                std::string(to_string(dataset.experiment)));
-  }
+  const std::string_view channel = experiment_of(dataset.experiment).channel;
   if (dataset.trials.size() < 2) {
     throw std::invalid_argument("diagnose needs two trials or more: one is held out");
   }
   Diagnosis diagnosis;
-  diagnosis.channel = std::string(kChannel);
-  const auto noise = dataset.noise_si.find(kChannel);
+  diagnosis.channel = std::string(channel);
+  const auto noise = dataset.noise_si.find(channel);
   diagnosis.noise_si = noise == dataset.noise_si.end() ? 0.0 : noise->second;
   // The fastest trial is held out (the last one at the highest rate when rates differ): a
-  // fit on the slower ones must predict it.
+  // fit on the slower ones must predict it. Without rates (slide), the last trial.
   std::vector<std::size_t> all_trials(dataset.trials.size());
   for (std::size_t k = 0; k < all_trials.size(); ++k) all_trials[k] = k;
   std::size_t held_out = all_trials.back();
@@ -184,7 +248,7 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   diagnosis.base_rmse = std::sqrt(base_all.rss / static_cast<double>(base_all.samples));
   diagnosis.base_bic = bic(base_all.rss, base_all.samples, 0);
   diagnosis.base_held_out_rmse = std::sqrt(base_out.rss / static_cast<double>(base_out.samples));
-  spdlog::info("diagnose: base model RMS {:.4g} N over {} samples, held out '{}'",
+  spdlog::info("diagnose: base model RMS {:.4g} (SI) over {} samples, held out '{}'",
                diagnosis.base_rmse, diagnosis.samples, diagnosis.held_out_trial);
 
   // Candidates in parallel: each fit runs its own twins, nothing shared but the inputs.

@@ -1,6 +1,9 @@
 #include "fl/workbench/generator.hpp"
 
+#include <algorithm>
 #include <fstream>
+#include <memory>
+#include <numbers>
 #include <random>
 #include <stdexcept>
 
@@ -33,6 +36,47 @@ const std::vector<EffectRange>& compress_effects() {
       {"bpm_plastic", {{"normal_yield_strength_pa", 50.0, 100.0, false}}},
   };
   return effects;
+}
+
+// Physical ranges for the slide test's flexible fillet on steel (appendix B: coulomb mu 0.5;
+// onset near 23 and 31 deg for the 144 and 172 mm variants). static_kinetic_friction: resting
+// friction 40 to 80 % above the sliding one. A flexible fillet's contacts creep at mm/s while
+// the plate tilts, so mu_s only acts where that creep counts as resting: the stick speed, 10
+// to 50 mm/s, is part of the effect (below it the onset moves by under 1 deg, no test sees it;
+// within these ranges it moves by 1 to 4 deg). wet_film: a wet plate's film takes 30 to 60 %
+// of the friction load (onset 5 to 10 deg lower on wet trials). Its meniscus
+// (surface_tension_n_per_m) stays 0: the onset angle cannot tell it from the lubrication
+// (both only scale the friction load), so hiding both would hide what no slide test can find.
+const std::vector<EffectRange>& slide_effects() {
+  static const std::vector<EffectRange> effects{
+      {"static_kinetic_friction",
+       {{"static_friction_coefficient", 0.7, 0.9, false},
+        {"stick_speed_m_per_s", 0.01, 0.05, true}}},
+      {"wet_film", {{"lubrication", 0.3, 0.6, false}}},
+  };
+  return effects;
+}
+
+const std::vector<EffectRange>& effects_of(ExperimentType type) {
+  if (type == ExperimentType::kSlide) return slide_effects();
+  return compress_effects();
+}
+
+// Trial k of a slide dataset: the variants in turn, each dry then wet; `repetitions` rows.
+Trial slide_trial(int k, int repetitions) {
+  static constexpr const char* kVariants[] = {"144x72x40", "172x72x32", "176x72x40"};
+  const std::string variant = kVariants[static_cast<std::size_t>(k / 2) % 3];
+  const std::string surface = k % 2 == 0 ? "dry" : "wet";
+  Trial trial;
+  trial.id = "s" + variant + "_" + surface;
+  if (k >= 6) trial.id += "_" + std::to_string(k / 6 + 1);  // the variants come round again
+  trial.conditions["variant"] = variant;
+  trial.conditions["mirrored"] = false;
+  trial.conditions["surface"] = surface;
+  trial.data.channels = {{"onset_angle", *find_unit("deg"),
+                          std::vector<double>(static_cast<std::size_t>(repetitions), 0.0)}};
+  trial.data.lines.resize(static_cast<std::size_t>(repetitions));
+  return trial;
 }
 
 // Load to the peak travel over `ramp_s`, hold, unload over `ramp_s`; rows every 5 ms.
@@ -71,6 +115,65 @@ std::vector<std::string> compress_effect_candidates() {
   return names;
 }
 
+std::vector<std::string> slide_effect_candidates() {
+  std::vector<std::string> names;
+  for (const EffectRange& effect : slide_effects()) names.emplace_back(effect.law);
+  return names;
+}
+
+dem::ModelSpec with_contact_effect(const dem::ModelSpec& base, const HiddenEffect& effect) {
+  dem::ModelSpec spec = base;
+  if (effect.law.empty()) return spec;
+  if (effect.law != "static_kinetic_friction" && effect.law != "wet_film" &&
+      effect.law != "rolling_resistance") {
+    throw std::invalid_argument("'" + effect.law + "' is not a contact-law effect");
+  }
+  const std::uint32_t equipment = model_tests::equipment_type(spec);
+  const auto named = [](std::string_view name) {
+    return [name](const dem::LawSpec& law) { return law.name == name; };
+  };
+  for (dem::InteractionSpec& interaction : spec.interactions) {
+    const bool a_fillet = interaction.type_a <= dem::kFilletTypeB;
+    const bool b_fillet = interaction.type_b <= dem::kFilletTypeB;
+    if (!((a_fillet && interaction.type_b == equipment) ||
+          (b_fillet && interaction.type_a == equipment))) {
+      continue;
+    }
+    std::vector<dem::LawSpec>& laws = interaction.contact_laws;
+    auto present = std::find_if(laws.begin(), laws.end(), named(effect.law));
+    if (present == laws.end()) {
+      auto friction = std::find_if(laws.begin(), laws.end(), named("coulomb"));
+      if (friction == laws.end()) {
+        friction = std::find_if(laws.begin(), laws.end(), named("static_kinetic_friction"));
+      }
+      if (effect.law == "static_kinetic_friction") {
+        dem::LawSpec law{effect.law, {}};
+        if (friction != laws.end() && friction->name == "coulomb") {
+          law.parameters["kinetic_friction_coefficient"] =
+              friction->parameters.at("friction_coefficient");
+          *friction = law;
+          present = friction;
+        } else {
+          present = laws.insert(friction, law);
+        }
+      } else if (effect.law == "wet_film") {
+        present = laws.insert(friction, dem::LawSpec{effect.law, {}});
+      } else {
+        present = laws.insert(friction == laws.end() ? laws.end() : friction + 1,
+                              dem::LawSpec{effect.law, {}});
+      }
+    }
+    for (const auto& [key, value] : effect.parameters) present->parameters[key] = value;
+    if (present->name == "static_kinetic_friction" &&
+        !effect.parameters.contains("kinetic_friction_coefficient")) {
+      // A resting friction below the inherited sliding one is a lower friction throughout.
+      double& kinetic = present->parameters["kinetic_friction_coefficient"];
+      kinetic = std::min(kinetic, present->parameters.at("static_friction_coefficient"));
+    }
+  }
+  return spec;
+}
+
 dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& effect) {
   dem::ModelSpec spec = base;
   if (effect.law.empty()) return spec;
@@ -84,16 +187,21 @@ dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& 
 }
 
 GeneratedDataset generate_dataset(const GeneratorOptions& options) {
-  if (options.experiment != ExperimentType::kCompress) {
-    throw std::invalid_argument("the generator makes compress datasets only, not " +
+  const bool slide = options.experiment == ExperimentType::kSlide;
+  if (!slide && options.experiment != ExperimentType::kCompress) {
+    throw std::invalid_argument("the generator makes compress and slide datasets, not " +
                                 std::string(to_string(options.experiment)));
   }
-  if (options.trials < 1 || !(options.force_noise_n >= 0.0)) {
-    throw std::invalid_argument("generator: trials must be >= 1 and the noise >= 0");
+  const double noise_si =
+      slide ? options.angle_noise_deg * std::numbers::pi / 180.0 : options.force_noise_n;
+  if (options.trials < 0 || options.repetitions < 1 || !(noise_si >= 0.0)) {
+    throw std::invalid_argument(
+        "generator: trials must be >= 0, repetitions >= 1 and the noise >= 0");
   }
+  const int trials = options.trials > 0 ? options.trials : (slide ? 4 : 3);
   std::mt19937_64 random(options.seed);
   GeneratedDataset made;
-  const std::vector<EffectRange>& effects = compress_effects();
+  const std::vector<EffectRange>& effects = effects_of(options.experiment);
   const EffectRange* chosen = nullptr;
   if (options.effect == "random") {
     chosen = &effects[std::uniform_int_distribution<std::size_t>(0, effects.size() - 1)(random)];
@@ -102,8 +210,8 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
       if (options.effect == effect.law) chosen = &effect;
     }
     if (chosen == nullptr) {
-      throw std::invalid_argument("generator: '" + options.effect +
-                                  "' is not random, none or a compress effect");
+      throw std::invalid_argument("generator: '" + options.effect + "' is not random, none or a " +
+                                  std::string(to_string(options.experiment)) + " effect");
     }
   }
   if (chosen != nullptr) {
@@ -118,22 +226,31 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
   model_tests::CommonParams truth_common = options.common;
   if (truth_common.base_spec.materials.empty())
     truth_common.base_spec = dem::appendix_b_model_spec();
-  truth_common.base_spec = with_bond_effect(truth_common.base_spec, made.truth);
-  TwinCompressModel truth(truth_common);
+  truth_common.base_spec = slide ? with_contact_effect(truth_common.base_spec, made.truth)
+                                 : with_bond_effect(truth_common.base_spec, made.truth);
+  std::unique_ptr<TrialModel> truth;
+  if (slide) {
+    truth = std::make_unique<TwinSlideModel>(truth_common);
+  } else {
+    truth = std::make_unique<TwinCompressModel>(truth_common);
+  }
 
   Dataset& data = made.dataset;
-  data.name = "synthetic compress, seed " + std::to_string(options.seed);
+  data.name = "synthetic " + std::string(to_string(options.experiment)) + ", seed " +
+              std::to_string(options.seed);
   data.description = "made by the workbench generator; the truth is in a separate file";
-  data.experiment = ExperimentType::kCompress;
-  data.noise_si["force"] = options.force_noise_n;
-  std::normal_distribution<double> noise(0.0, options.force_noise_n);
-  for (int k = 0; k < options.trials; ++k) {
-    const double ramp_s = 0.2 / std::pow(2.0, k);  // 0.2, 0.1, 0.05 s: rate dependence shows
-    Trial trial = compress_trial("rate" + std::to_string(k + 1), ramp_s);
-    const Table force = truth.run(data, trial);
-    std::vector<double>& measured = trial.data.channels[2].values_si;
-    measured = force.at("force").values_si;
-    if (options.force_noise_n > 0.0) {
+  data.experiment = options.experiment;
+  const std::string channel = slide ? "onset_angle" : "force";
+  data.noise_si[channel] = noise_si;
+  std::normal_distribution<double> noise(0.0, noise_si);
+  for (int k = 0; k < trials; ++k) {
+    // Compress: ramps of 0.2, 0.1, 0.05 s, ...: the rate dependence shows.
+    Trial trial = slide ? slide_trial(k, options.repetitions)
+                        : compress_trial("rate" + std::to_string(k + 1), 0.2 / std::pow(2.0, k));
+    const Table response = truth->run(data, trial);
+    std::vector<double>& measured = trial.data.channels.back().values_si;
+    measured = response.at(channel).values_si;
+    if (noise_si > 0.0) {
       for (double& value : measured) value += noise(random);
     }
     data.trials.push_back(std::move(trial));

@@ -83,7 +83,7 @@ TEST(Generator, RefusesWhatItCannotMake) {
   options.effect = "magic";
   EXPECT_THROW((void)generate_dataset(options), std::invalid_argument);
   options.effect = "none";
-  options.experiment = ExperimentType::kSlide;
+  options.experiment = ExperimentType::kBend;
   EXPECT_THROW((void)generate_dataset(options), std::invalid_argument);
 }
 

@@ -1,5 +1,6 @@
-// Fixtures shared by the workbench tests: the base DEM model of the compression tests, datasets
-// generated with a hidden effect, and the score a model with a given effect gets on them.
+// Fixtures shared by the workbench tests: the base DEM model of the compression and slide
+// tests, datasets generated with a hidden effect, and the score a model with a given effect gets on
+// them.
 #pragma once
 
 #include <cstdint>
@@ -39,6 +40,29 @@ inline double force_score(const Dataset& data, const HiddenEffect& effect) {
   common.base_spec = with_bond_effect(common.base_spec, effect);
   TwinCompressModel model(common);
   return compare(data, model).overall("force").score;
+}
+
+// Onset-angle noise of the generated slide datasets (the generator's default, an
+// inclinometer's repeatability), in degrees.
+inline constexpr double kAngleNoiseDeg = 0.3;
+
+// A slide dataset (two variants, dry and wet, 10 repetitions) with `effect` hidden in it.
+inline GeneratedDataset generate_slide(const std::string& effect, std::uint64_t seed = 3) {
+  GeneratorOptions options;
+  options.experiment = ExperimentType::kSlide;
+  options.seed = seed;
+  options.effect = effect;
+  options.angle_noise_deg = kAngleNoiseDeg;
+  options.common = base_model();
+  return generate_dataset(options);
+}
+
+// The overall onset-angle score of the slide twin with the contact `effect` added.
+inline double angle_score(const Dataset& data, const HiddenEffect& effect) {
+  model_tests::CommonParams common = base_model();
+  common.base_spec = with_contact_effect(common.base_spec, effect);
+  TwinSlideModel model(common);
+  return compare(data, model).overall("onset_angle").score;
 }
 
 }  // namespace fl::workbench::test

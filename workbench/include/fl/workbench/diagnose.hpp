@@ -24,13 +24,20 @@ struct ParameterBound {
 };
 
 struct EffectCandidate {
-  std::string law;  // a bond law of the effect library
+  // A law of the effect library: a bond law for compress datasets, a fillet-equipment contact
+  // law for slide datasets (the experiment type decides where it goes in the model).
+  std::string law;
   std::vector<ParameterBound> parameters;
 };
 
 // The effect library's candidates for a compression dataset, with bounds wide enough for any
 // fillet (three to four decades), not the generator's ranges.
 std::vector<EffectCandidate> compress_candidates();
+// The contact-law effects for a slide dataset (static_kinetic_friction, wet_film,
+// rolling_resistance), bounds as wide.
+std::vector<EffectCandidate> slide_candidates();
+// The candidates of a dataset's experiment; throws std::invalid_argument for other types.
+std::vector<EffectCandidate> candidates_for(ExperimentType type);
 
 struct CandidateResult {
   std::string law;
@@ -66,7 +73,10 @@ struct DiagnoseOptions {
   double min_held_out_gain = 0.2;
 };
 
-// Throws std::invalid_argument for a dataset it cannot diagnose (compress only, two trials
+// The channel judged, the twin and where the effect goes come from the experiment type
+// (compress: force, bond law; slide: onset_angle, fillet-equipment contact chain). The trial
+// held out is the fastest when trials have a rate, else the last. Throws
+// std::invalid_argument for a dataset it cannot diagnose (compress and slide only, two trials
 // or more so one can be held out).
 Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base,
                    const std::vector<EffectCandidate>& candidates,

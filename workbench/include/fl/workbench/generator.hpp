@@ -27,14 +27,22 @@ struct HiddenEffect {
 
 // The effects a compression test can reveal (bond laws), with their physical ranges.
 std::vector<std::string> compress_effect_candidates();
+// The effects a slide test can reveal (fillet-equipment contact laws): static_kinetic_friction
+// (resting friction above the sliding one) and wet_film (a lubricating film on wet plates).
+std::vector<std::string> slide_effect_candidates();
 
 struct GeneratorOptions {
-  ExperimentType experiment = ExperimentType::kCompress;  // compress only, so far
+  ExperimentType experiment = ExperimentType::kCompress;  // compress or slide
   std::uint64_t seed = 1;
-  // "random": one of the candidates; "none"; or a law name from the candidates.
+  // "random": one of the experiment's candidates; "none"; or a law name from the candidates.
   std::string effect = "random";
-  double force_noise_n = 0.01;       // 1 sigma, Gaussian; written into the manifest
-  int trials = 3;                    // loading rates 1x, 2x, 4x
+  double force_noise_n = 0.01;   // compress: 1 sigma, Gaussian; written into the manifest
+  double angle_noise_deg = 0.3;  // slide: 1 sigma on each onset angle (an inclinometer's)
+  // Compress: loading rates 1x, 2x, 4x, ... Slide: fillet variants in turn (144x72x40,
+  // 172x72x32, 176x72x40), each dry then wet, so the last of an even count is wet. 0: the
+  // experiment's default (compress 3, slide 4).
+  int trials = 0;
+  int repetitions = 10;              // slide: onset angles (rows) per trial
   model_tests::CommonParams common;  // the base model (appendix B, 7 mm) the effect joins
 };
 
@@ -49,6 +57,14 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options);
 // The base model's spec with an effect's bond law in place of bpm (parameters kept, the
 // effect's added). Shared by the generator and by what fits effects.
 dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& effect);
+
+// The base model's spec with a contact-law effect in every fillet-equipment chain, at its place
+// in the chain (docs/twin.md): static_kinetic_friction replaces coulomb (its kinetic
+// coefficient, when the effect does not give it, is the replaced coulomb's: the base model's
+// friction is the sliding one; capped at the static one), wet_film goes before the friction law,
+// rolling_resistance after it. A law already in the chain gets the effect's parameters. Throws
+// std::invalid_argument for another law.
+dem::ModelSpec with_contact_effect(const dem::ModelSpec& base, const HiddenEffect& effect);
 
 // Writes the dataset in the measurement format (manifest.yaml and one CSV per trial).
 void write_dataset(const Dataset& dataset, const std::filesystem::path& folder);

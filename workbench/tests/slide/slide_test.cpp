@@ -1,0 +1,161 @@
+// The slide experiment in the workbench: the twin reproduces onset angles from a trial's
+// conditions (a wet film acting on wet trials only; a fillet that never slides reported, not
+// fatal), and the generator's hidden contact effects make the base model fail while the truth
+// model sits at the noise level. One slide run of the 7 mm fillet takes about a second.
+#include <gtest/gtest.h>
+
+#include <numbers>
+#include <set>
+
+#include "fl/workbench/generator.hpp"
+#include "fl/workbench/twin_models.hpp"
+#include "workbench_test_support.hpp"
+
+namespace fl::workbench {
+namespace {
+
+using test::base_model;
+using test::generate_slide;
+
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+
+double onset_deg(TwinSlideModel& model, const Dataset& data, std::size_t trial) {
+  return model.run(data, data.trials[trial]).at("onset_angle").values_si.front() * kDegPerRad;
+}
+
+TEST(SlideTwin, WetFilmActsOnWetTrialsOnlyAndLowersTheOnset) {
+  // Trials 0 and 1: the 144x72x40 variant dry, then wet.
+  const Dataset data = generate_slide("none").dataset;
+  TwinSlideModel base(base_model());
+  model_tests::CommonParams filmed = base_model();
+  filmed.base_spec = with_contact_effect(filmed.base_spec, {"wet_film", {{"lubrication", 0.5}}});
+  TwinSlideModel wet(filmed);
+  const double dry_base = onset_deg(base, data, 0);
+  // The base model does not know the surface: dry and wet alike.
+  EXPECT_DOUBLE_EQ(onset_deg(base, data, 1), dry_base);
+  // The film is out of the chain on dry trials: the same run, the same angle.
+  EXPECT_DOUBLE_EQ(onset_deg(wet, data, 0), dry_base);
+  // Half the friction load: a block would go from atan 0.5 = 27 to atan 0.25 = 14 deg; the
+  // fillet must fall by well over the 0.05 deg resolution, 3 deg is a tenth of that fall.
+  EXPECT_LT(onset_deg(wet, data, 1), dry_base - 3.0);
+  // Every row is a repetition of the same deterministic run.
+  const Table rows = wet.run(data, data.trials[1]);
+  EXPECT_EQ(rows.rows(), data.trials[1].data.rows());
+}
+
+TEST(SlideTwin, AFilletThatNeverSlidesIsReportedNotFatal) {
+  const Dataset all = generate_slide("none").dataset;
+  Dataset data = all;
+  data.trials = {all.trials[0], all.trials[2]};  // 144x72x40 and 172x72x32, dry
+  // The base onsets are about 23 and 31 deg: a plate stopped at 27 deg, 4 deg from each,
+  // sees the first fillet slide and not the second.
+  TwinSlideModel model(base_model(), SlideSettings{5.0, 27.0});
+  EXPECT_THROW((void)model.run(data, data.trials[1]), std::runtime_error);
+  const CompareReport report = compare(data, model);
+  ASSERT_EQ(report.failed_trials.size(), 1U);
+  EXPECT_EQ(report.failed_trials.front().rfind(data.trials[1].id, 0), 0U)
+      << report.failed_trials.front();
+  EXPECT_NE(report.failed_trials.front().find("not slid"), std::string::npos);
+  EXPECT_EQ(report.traces.size(), 1U);
+}
+
+TEST(SlideGenerator, DatasetRoundTripsThroughTheMeasurementFormat) {
+  const GeneratedDataset made = generate_slide("none");
+  const auto folder = std::filesystem::temp_directory_path() / "fl_slide_round_trip";
+  std::filesystem::remove_all(folder);
+  write_dataset(made.dataset, folder);
+  const Dataset loaded = load_dataset(folder);
+  EXPECT_EQ(loaded.experiment, ExperimentType::kSlide);
+  ASSERT_EQ(loaded.trials.size(), 4U);  // the slide default: two variants, dry and wet
+  EXPECT_NEAR(loaded.noise_si.at("onset_angle") * kDegPerRad, test::kAngleNoiseDeg, 1e-12);
+  std::set<std::string> surfaces;
+  for (std::size_t t = 0; t < loaded.trials.size(); ++t) {
+    const Trial& a = made.dataset.trials[t];
+    const Trial& b = loaded.trials[t];
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(a.conditions, b.conditions);
+    surfaces.insert(std::get<std::string>(b.conditions.at("surface")));
+    const auto& x = a.data.at("onset_angle").values_si;
+    const auto& y = b.data.at("onset_angle").values_si;
+    ASSERT_EQ(x.size(), 10U);  // the default repetitions
+    ASSERT_EQ(x.size(), y.size());
+    // Written in degrees with 17 significant digits and read back: a rounding at most.
+    for (std::size_t k = 0; k < x.size(); ++k) EXPECT_NEAR(x[k], y[k], 1e-14);
+  }
+  EXPECT_EQ(surfaces, (std::set<std::string>{"dry", "wet"}));
+  std::filesystem::remove_all(folder);
+}
+
+TEST(SlideGenerator, EveryHiddenEffectFailsTheBaseModelAndNotTheTruth) {
+  for (const std::string& effect : slide_effect_candidates()) {
+    SCOPED_TRACE(effect);
+    const GeneratedDataset made = generate_slide(effect);
+    ASSERT_EQ(made.truth.law, effect);
+    // The truth model leaves only the noise: RMS/sigma over 40 Gaussian angles is 1 within
+    // about 1/sqrt(80) = 0.11 per sigma; 0.35 is three of those.
+    EXPECT_NEAR(test::angle_score(made.dataset, made.truth), 1.0, 0.35);
+    // The weakest effect in the generator's ranges moves the onset by about 1 deg, over 3
+    // sigmas of 0.3 deg.
+    EXPECT_GT(test::angle_score(made.dataset, {}), 3.0);
+  }
+}
+
+TEST(SlideGenerator, WithoutAHiddenEffectTheBaseModelSitsAtTheNoise) {
+  const GeneratedDataset made = generate_slide("none");
+  EXPECT_TRUE(made.truth.law.empty());
+  EXPECT_NEAR(test::angle_score(made.dataset, {}), 1.0, 0.35);  // as the truth model above
+}
+
+TEST(SlideGenerator, RandomChoiceIsSeededAndCoversTheCandidates) {
+  GeneratorOptions options;
+  options.experiment = ExperimentType::kSlide;
+  options.common = base_model();
+  options.trials = 1;
+  options.repetitions = 1;
+  std::set<std::string> chosen;
+  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+    options.seed = seed;
+    const GeneratedDataset a = generate_dataset(options);
+    const GeneratedDataset b = generate_dataset(options);
+    EXPECT_EQ(a.truth.law, b.truth.law);
+    EXPECT_EQ(a.truth.parameters, b.truth.parameters);
+    chosen.insert(a.truth.law);
+  }
+  // 8 fair draws of 2 candidates miss one with probability 2 / 2^8: seeded, so fixed here.
+  EXPECT_EQ(chosen.size(), slide_effect_candidates().size());
+}
+
+TEST(SlideGenerator, ContactEffectsTakeTheirPlaceInTheChain) {
+  const dem::ModelSpec base = base_model().base_spec;
+  const std::uint32_t equipment = model_tests::equipment_type(base);
+  const auto chain = [&](const dem::ModelSpec& spec) {
+    std::vector<std::string> names;
+    for (const dem::InteractionSpec& interaction : spec.interactions) {
+      if (interaction.type_b != equipment) continue;
+      for (const dem::LawSpec& law : interaction.contact_laws) names.push_back(law.name);
+      break;
+    }
+    return names;
+  };
+  const dem::ModelSpec sticky = with_contact_effect(
+      base, {"static_kinetic_friction", {{"static_friction_coefficient", 0.8}}});
+  EXPECT_EQ(chain(sticky),
+            (std::vector<std::string>{"hertz_mindlin", "jkr", "static_kinetic_friction"}));
+  const dem::ModelSpec filmed = with_contact_effect(base, {"wet_film", {{"lubrication", 0.4}}});
+  EXPECT_EQ(chain(filmed),
+            (std::vector<std::string>{"hertz_mindlin", "jkr", "wet_film", "coulomb"}));
+  const dem::ModelSpec rolling =
+      with_contact_effect(filmed, {"rolling_resistance", {{"rolling_friction", 0.1}}});
+  EXPECT_EQ(chain(rolling), (std::vector<std::string>{"hertz_mindlin", "jkr", "wet_film", "coulomb",
+                                                      "rolling_resistance"}));
+  // The replaced coulomb's 0.5 stays the sliding friction.
+  for (const dem::InteractionSpec& interaction : sticky.interactions) {
+    if (interaction.type_b != equipment) continue;
+    EXPECT_DOUBLE_EQ(interaction.contact_laws[2].parameters.at("kinetic_friction_coefficient"),
+                     0.5);
+  }
+  EXPECT_THROW((void)with_contact_effect(base, {"bpm_plastic", {}}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace fl::workbench
