@@ -60,14 +60,6 @@ std::optional<WorkbenchInputs> load_inputs(const CompareArgs& args) {
   return inputs;
 }
 
-// The twin of the dataset's experiment (load_inputs lets only these through).
-std::unique_ptr<TrialModel> make_twin(const WorkbenchInputs& inputs) {
-  if (inputs.dataset.experiment == ExperimentType::kSlide) {
-    return std::make_unique<TwinSlideModel>(inputs.common);
-  }
-  return std::make_unique<TwinCompressModel>(inputs.common);
-}
-
 fs::path out_folder(const CompareArgs& args, const char* prefix) {
   return args.out.empty()
              ? fs::path(std::string(prefix) + fs::path(args.dataset).filename().string())
@@ -178,7 +170,7 @@ int compare_command(const CompareArgs& args) {
   const std::optional<WorkbenchInputs> inputs = load_inputs(args);
   if (!inputs) return 2;
   const Dataset& dataset = inputs->dataset;
-  std::unique_ptr<TrialModel> model = make_twin(*inputs);
+  std::unique_ptr<TrialModel> model = make_twin_model(dataset.experiment, inputs->common);
   spdlog::info("comparing {} ({} trials, {}) with: {}", dataset.name, dataset.trials.size(),
                to_string(dataset.experiment), model->describe());
   const CompareReport report = compare(dataset, *model);

@@ -18,30 +18,18 @@
 namespace fl::workbench {
 namespace {
 
-// What the experiment type decides: the channel judged, the twin that runs it, and where a
-// candidate effect goes in the model (compress: the bond law; slide: the fillet-equipment
-// contact chain).
-struct Experiment {
-  std::string_view channel;
-  bool contact_effects = false;
-};
-
-Experiment experiment_of(ExperimentType type) {
+// The channel judged for an experiment type (the twin and where an effect goes follow from
+// the type too: make_twin_model, with_experiment_effect).
+std::string_view judged_channel(ExperimentType type) {
   switch (type) {
     case ExperimentType::kCompress:
-      return {"force", false};
+      return "force";
     case ExperimentType::kSlide:
-      return {"onset_angle", true};
+      return "onset_angle";
     default:
       throw std::invalid_argument("diagnose handles compress and slide datasets, not " +
                                   std::string(to_string(type)));
   }
-}
-
-std::unique_ptr<TrialModel> make_model(ExperimentType type,
-                                       const model_tests::CommonParams& common) {
-  if (type == ExperimentType::kSlide) return std::make_unique<TwinSlideModel>(common);
-  return std::make_unique<TwinCompressModel>(common);
 }
 
 struct Residuals {
@@ -52,8 +40,8 @@ struct Residuals {
 // Sum of squared residuals of the judged channel over the chosen trials.
 Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& common,
                     const std::vector<std::size_t>& trials) {
-  const std::string_view channel = experiment_of(dataset.experiment).channel;
-  const std::unique_ptr<TrialModel> model = make_model(dataset.experiment, common);
+  const std::string_view channel = judged_channel(dataset.experiment);
+  const std::unique_ptr<TrialModel> model = make_twin_model(dataset.experiment, common);
   Residuals r;
   for (const std::size_t index : trials) {
     const Trial& trial = dataset.trials[index];
@@ -89,8 +77,8 @@ struct FitContext {
 };
 
 model_tests::CommonParams with_effect(const model_tests::CommonParams& base,
-                                      const EffectCandidate& candidate, const double* unit_point,
-                                      bool contact_effect) {
+                                      const EffectCandidate& candidate, ExperimentType experiment,
+                                      const double* unit_point) {
   HiddenEffect effect;
   effect.law = candidate.law;
   for (std::size_t p = 0; p < candidate.parameters.size(); ++p) {
@@ -98,8 +86,7 @@ model_tests::CommonParams with_effect(const model_tests::CommonParams& base,
         from_unit(candidate.parameters[p], unit_point[p]);
   }
   model_tests::CommonParams common = base;
-  common.base_spec = contact_effect ? with_contact_effect(base.base_spec, effect)
-                                    : with_bond_effect(base.base_spec, effect);
+  common.base_spec = with_experiment_effect(base.base_spec, experiment, effect);
   return common;
 }
 
@@ -111,8 +98,7 @@ double objective(unsigned n, const double* x, double* gradient, void* data) {
   try {
     const double rss =
         residuals(*context.dataset,
-                  with_effect(*context.base, *context.candidate, x,
-                              experiment_of(context.dataset->experiment).contact_effects),
+                  with_effect(*context.base, *context.candidate, context.dataset->experiment, x),
                   *context.trials)
             .rss;
     context.best_rss = std::min(context.best_rss, rss);
@@ -174,7 +160,7 @@ CandidateResult fit(const Dataset& dataset, const model_tests::CommonParams& bas
     result.fitted[candidate.parameters[p].name] = from_unit(candidate.parameters[p], x[p]);
   }
   const model_tests::CommonParams fitted =
-      with_effect(base, candidate, x.data(), experiment_of(dataset.experiment).contact_effects);
+      with_effect(base, candidate, dataset.experiment, x.data());
   const Residuals all = residuals(dataset, fitted, all_trials);
   result.rss = all.rss;
   result.bic = bic(all.rss, all.samples, dimensions);
@@ -215,7 +201,7 @@ std::vector<EffectCandidate> candidates_for(ExperimentType type) {
 
 Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base,
                    const std::vector<EffectCandidate>& candidates, const DiagnoseOptions& options) {
-  const std::string_view channel = experiment_of(dataset.experiment).channel;
+  const std::string_view channel = judged_channel(dataset.experiment);
   if (dataset.trials.size() < 2) {
     throw std::invalid_argument("diagnose needs two trials or more: one is held out");
   }

@@ -133,12 +133,7 @@ dem::ModelSpec with_contact_effect(const dem::ModelSpec& base, const HiddenEffec
     return [name](const dem::LawSpec& law) { return law.name == name; };
   };
   for (dem::InteractionSpec& interaction : spec.interactions) {
-    const bool a_fillet = interaction.type_a <= dem::kFilletTypeB;
-    const bool b_fillet = interaction.type_b <= dem::kFilletTypeB;
-    if (!((a_fillet && interaction.type_b == equipment) ||
-          (b_fillet && interaction.type_a == equipment))) {
-      continue;
-    }
+    if (!model_tests::is_fillet_with(interaction, equipment)) continue;
     std::vector<dem::LawSpec>& laws = interaction.contact_laws;
     auto present = std::find_if(laws.begin(), laws.end(), named(effect.law));
     if (present == laws.end()) {
@@ -186,6 +181,12 @@ dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& 
   return spec;
 }
 
+dem::ModelSpec with_experiment_effect(const dem::ModelSpec& base, ExperimentType experiment,
+                                      const HiddenEffect& effect) {
+  return experiment == ExperimentType::kSlide ? with_contact_effect(base, effect)
+                                              : with_bond_effect(base, effect);
+}
+
 GeneratedDataset generate_dataset(const GeneratorOptions& options) {
   const bool slide = options.experiment == ExperimentType::kSlide;
   if (!slide && options.experiment != ExperimentType::kCompress) {
@@ -226,14 +227,9 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
   model_tests::CommonParams truth_common = options.common;
   if (truth_common.base_spec.materials.empty())
     truth_common.base_spec = dem::appendix_b_model_spec();
-  truth_common.base_spec = slide ? with_contact_effect(truth_common.base_spec, made.truth)
-                                 : with_bond_effect(truth_common.base_spec, made.truth);
-  std::unique_ptr<TrialModel> truth;
-  if (slide) {
-    truth = std::make_unique<TwinSlideModel>(truth_common);
-  } else {
-    truth = std::make_unique<TwinCompressModel>(truth_common);
-  }
+  truth_common.base_spec =
+      with_experiment_effect(truth_common.base_spec, options.experiment, made.truth);
+  const std::unique_ptr<TrialModel> truth = make_twin_model(options.experiment, truth_common);
 
   Dataset& data = made.dataset;
   data.name = "synthetic " + std::string(to_string(options.experiment)) + ", seed " +

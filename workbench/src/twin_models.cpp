@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -45,13 +46,6 @@ std::size_t slide_variant(const Conditions& conditions, std::size_t base_variant
   const auto flag = conditions.find("mirrored");
   if (flag != conditions.end()) mirrored = std::get<bool>(flag->second);
   return 2 * size + (mirrored ? 1 : 0);
-}
-
-bool is_fillet_equipment(const dem::InteractionSpec& interaction, std::uint32_t equipment) {
-  const bool a_fillet = interaction.type_a <= dem::kFilletTypeB;
-  const bool b_fillet = interaction.type_b <= dem::kFilletTypeB;
-  return (a_fillet && interaction.type_b == equipment) ||
-         (b_fillet && interaction.type_a == equipment);
 }
 
 std::string law_text(const dem::LawSpec& law) {
@@ -131,7 +125,7 @@ std::string TwinSlideModel::describe() const {
        << " mm sub-particles; fillet-equipment laws:";
   const std::uint32_t equipment = model_tests::equipment_type(common_.base_spec);
   for (const dem::InteractionSpec& interaction : common_.base_spec.interactions) {
-    if (!is_fillet_equipment(interaction, equipment)) continue;
+    if (!model_tests::is_fillet_with(interaction, equipment)) continue;
     for (const dem::LawSpec& law : interaction.contact_laws) text << " " << law_text(law);
     break;  // fillet types A and B share the chain
   }
@@ -156,7 +150,7 @@ Table TwinSlideModel::run(const Dataset& dataset, const Trial& trial) {
   // spec's own, so the spec is the one source of the model.
   std::optional<double> friction, surface_energy;
   for (dem::InteractionSpec& interaction : spec.interactions) {
-    if (!is_fillet_equipment(interaction, equipment)) continue;
+    if (!model_tests::is_fillet_with(interaction, equipment)) continue;
     std::vector<dem::LawSpec>& laws = interaction.contact_laws;
     if (!wet) std::erase_if(laws, [](const dem::LawSpec& law) { return law.name == "wet_film"; });
     const auto coulomb = std::find_if(
@@ -196,6 +190,19 @@ Table TwinSlideModel::run(const Dataset& dataset, const Trial& trial) {
        std::vector<double>(trial.data.rows(), *result.slide_angle_deg * kRadPerDeg)});
   table.lines = trial.data.lines;
   return table;
+}
+
+std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
+                                            const model_tests::CommonParams& common) {
+  switch (experiment) {
+    case ExperimentType::kCompress:
+      return std::make_unique<TwinCompressModel>(common);
+    case ExperimentType::kSlide:
+      return std::make_unique<TwinSlideModel>(common);
+    default:
+      throw std::invalid_argument("the twin does not reproduce " +
+                                  std::string(to_string(experiment)) + " datasets yet");
+  }
 }
 
 }  // namespace fl::workbench

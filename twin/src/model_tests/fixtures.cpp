@@ -61,17 +61,19 @@ void set_bond_stiffness(dem::ModelSpec& spec, const Stiffness& stiffness) {
   }
 }
 
+bool is_fillet_with(const dem::InteractionSpec& interaction, std::uint32_t other_type) {
+  const bool a_is_fillet = interaction.type_a <= dem::kFilletTypeB;
+  const bool b_is_fillet = interaction.type_b <= dem::kFilletTypeB;
+  return (a_is_fillet && interaction.type_b == other_type) ||
+         (b_is_fillet && interaction.type_a == other_type);
+}
+
 void set_contact_parameter(dem::ModelSpec& spec, const std::string& law, const std::string& key,
                            double value, std::optional<std::uint32_t> other_type) {
   bool found = false;
   for (auto& interaction : spec.interactions) {
-    const bool a_is_fillet = interaction.type_a <= dem::kFilletTypeB;
-    const bool b_is_fillet = interaction.type_b <= dem::kFilletTypeB;
-    if (!a_is_fillet && !b_is_fillet) continue;
-    if (other_type && !((a_is_fillet && interaction.type_b == *other_type) ||
-                        (b_is_fillet && interaction.type_a == *other_type))) {
-      continue;
-    }
+    if (interaction.type_a > dem::kFilletTypeB && interaction.type_b > dem::kFilletTypeB) continue;
+    if (other_type && !is_fillet_with(interaction, *other_type)) continue;
     for (auto& spec_of_law : interaction.contact_laws) {
       if (spec_of_law.name == law) {
         spec_of_law.parameters[key] = value;

@@ -65,6 +65,10 @@ dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& 
 // rolling_resistance after it. A law already in the chain gets the effect's parameters. Throws
 // std::invalid_argument for another law.
 dem::ModelSpec with_contact_effect(const dem::ModelSpec& base, const HiddenEffect& effect);
+// The effect where the experiment's candidates go: a bond law for compress, the
+// fillet-equipment contact chain for slide.
+dem::ModelSpec with_experiment_effect(const dem::ModelSpec& base, ExperimentType experiment,
+                                      const HiddenEffect& effect);
 
 // Writes the dataset in the measurement format (manifest.yaml and one CSV per trial).
 void write_dataset(const Dataset& dataset, const std::filesystem::path& folder);

@@ -4,6 +4,8 @@
 // model is a change of that spec (config/dem.yaml), not of this code.
 #pragma once
 
+#include <memory>
+
 #include "fl/twin/model_tests/fixtures.hpp"
 #include "fl/workbench/compare.hpp"
 
@@ -48,5 +50,10 @@ class TwinSlideModel final : public TrialModel {
   model_tests::CommonParams common_;
   SlideSettings settings_;
 };
+
+// The twin of an experiment type (compress, slide): what compare, diagnose and the generator
+// run. Throws std::invalid_argument for a type the twin does not reproduce yet.
+std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
+                                            const model_tests::CommonParams& common);
 
 }  // namespace fl::workbench

@@ -55,6 +55,8 @@ void set_bond_stiffness(dem::ModelSpec& spec, const Stiffness& stiffness);
 void set_contact_parameter(dem::ModelSpec& spec, const std::string& law, const std::string& key,
                            double value, std::optional<std::uint32_t> other_type);
 std::uint32_t equipment_type(const dem::ModelSpec& spec);
+// Whether the interaction is between a fillet type and `other_type`.
+bool is_fillet_with(const dem::InteractionSpec& interaction, std::uint32_t other_type);
 
 // One fillet of the chosen variant filled with spheres of the chosen radius, then scaled by
 // `scale` (positions, radii and contact radii: the same particles, as the thesis' scaling).
