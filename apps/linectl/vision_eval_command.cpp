@@ -7,6 +7,8 @@
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 
 #include "fl/report/svg_plot.hpp"
@@ -199,6 +201,33 @@ void write_html(const std::vector<CameraTally>& cameras, const AccuracyTally& al
   if (!out) throw std::runtime_error(file.string() + ": cannot write");
 }
 
+std::string recording_stem(const std::string& path) {
+  return std::filesystem::path(path).stem().string();
+}
+
+// The frame of a missed single with its true pose drawn on it (a cross at the pose, a line
+// 40 mm towards the tip) and why it was missed, for a person to look at.
+void write_missed_frame(const std::filesystem::path& path, const cv::Mat& image,
+                        const vision::BeltCalibration& calibration,
+                        const vision::MissedSingle& miss) {
+  cv::Mat marked;
+  if (image.channels() == 1) {
+    cv::cvtColor(image, marked, cv::COLOR_GRAY2BGR);
+  } else {
+    marked = image.clone();
+  }
+  const cv::Point2d pose_px = calibration.belt_to_pixel({miss.x_mm, miss.y_mm});
+  const cv::Point2d tip_px = calibration.belt_to_pixel(
+      {miss.x_mm + 40.0 * std::cos(miss.angle_rad), miss.y_mm + 40.0 * std::sin(miss.angle_rad)});
+  const cv::Scalar magenta(255, 0, 255);
+  cv::drawMarker(marked, pose_px, magenta, cv::MARKER_CROSS, 15, 2);
+  cv::line(marked, pose_px, tip_px, magenta, 2);
+  cv::putText(marked, miss.why, {5, marked.rows - 8}, cv::FONT_HERSHEY_SIMPLEX, 0.45, magenta, 1);
+  if (!cv::imwrite(path.string(), marked)) {
+    spdlog::warn("{}: cannot write", path.string());
+  }
+}
+
 }  // namespace
 
 CLI::App* add_vision_subcommand(CLI::App& app, VisionEvalArgs& args) {
@@ -225,6 +254,10 @@ int vision_eval_command(const VisionEvalArgs& args) {
     spdlog::error("--set: {}", error.what());
     return 2;
   }
+  const std::filesystem::path missed_directory =
+      std::filesystem::path(args.out_directory) / "missed";
+  std::filesystem::remove_all(missed_directory);  // a rerun's misses only
+  std::filesystem::create_directories(missed_directory);
   AccuracyTally all;
   std::vector<CameraTally> cameras;
   nlohmann::json per_camera = nlohmann::json::object();
@@ -259,7 +292,14 @@ int vision_eval_command(const VisionEvalArgs& args) {
           return 2;
         }
         const vision::FrameResult result = estimator.estimate(image, frame.exposure_ns, sequence);
+        const std::size_t missed_before = camera_tally.tally.missed_singles().size();
         camera_tally.tally.add_frame(result, truth->second);
+        for (std::size_t m = missed_before; m < camera_tally.tally.missed_singles().size(); ++m) {
+          const vision::MissedSingle& miss = camera_tally.tally.missed_singles()[m];
+          write_missed_frame(missed_directory / fmt::format("{}_{}_{}.png", recording_stem(path),
+                                                            to_string(camera), miss.sequence),
+                             image, *recorded.calibration, miss);
+        }
         all.add_frame(result, truth->second);
       }
       if (frames_without_truth > 0) {
@@ -269,6 +309,17 @@ int vision_eval_command(const VisionEvalArgs& args) {
       spdlog::info("{}: {} frames evaluated", camera_tally.name,
                    camera_tally.tally.summary().frames);
       per_camera[camera_tally.name] = to_json(camera_tally.tally.summary());
+      nlohmann::json missed = nlohmann::json::array();
+      for (const vision::MissedSingle& miss : camera_tally.tally.missed_singles()) {
+        missed.push_back({{"sequence", miss.sequence},
+                          {"x_mm", miss.x_mm},
+                          {"y_mm", miss.y_mm},
+                          {"angle_rad", miss.angle_rad},
+                          {"why", miss.why}});
+        spdlog::warn("{}: frame {}: single fillet at ({:.1f}, {:.1f}) mm missed: {}",
+                     camera_tally.name, miss.sequence, miss.x_mm, miss.y_mm, miss.why);
+      }
+      per_camera[camera_tally.name]["missed_singles"] = std::move(missed);
       cameras.push_back(std::move(camera_tally));
     }
     if (!any_truth) {

@@ -29,6 +29,14 @@ rc=$?
 [ "$rc" -eq 1 ] || { cat "$work/broken.txt"; fail "a broken estimator passed (exit $rc)"; }
 grep -q "MISSED" "$work/broken.txt" || fail "no target reported missed"
 
+# A 100 px border margin calls nearly every fillet cut: each miss is listed with its frame and
+# reason in eval.json and drawn into a PNG a person can open.
+"$linectl" vision eval "$work/twin.mcap" --out "$work/eval_cut" --set border_margin_px=100 \
+  >"$work/cut.txt" 2>&1 || { cat "$work/cut.txt"; fail "eval with a wide border margin"; }
+grep -q '"why": "a blob cut by the image border' "$work/eval_cut/eval.json" ||
+  fail "the misses are not listed with their reason"
+ls "$work"/eval_cut/missed/twin_orientation_*.png >/dev/null 2>&1 || fail "no missed-frame PNG"
+
 # Recordings made before the truth channel (or of real cameras) have nothing to judge by.
 "$linectl" vision eval "$old_recording" --out "$work/eval_old" >"$work/old.txt" 2>&1
 rc=$?

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
 
 namespace fl::vision {
 namespace {
@@ -28,6 +29,29 @@ double distance_mm(const FilletEstimate& estimate, const TrueFillet& fillet) {
 
 double share(std::uint64_t part, std::uint64_t whole) {
   return whole == 0 ? 1.0 : static_cast<double>(part) / static_cast<double>(whole);
+}
+
+std::string why_missed(const FrameResult& result, const std::vector<const FilletEstimate*>& blobs,
+                       const TrueFillet& fillet) {
+  if (result.status != FrameStatus::kOk) {
+    return "frame refused: " + std::string(to_string(result.status));
+  }
+  double nearest_mm = -1.0;
+  for (const FilletEstimate* blob : blobs) {
+    const double d = distance_mm(*blob, fillet);
+    if (nearest_mm < 0.0 || d < nearest_mm) nearest_mm = d;
+  }
+  std::string why;
+  if (nearest_mm >= 0.0) {
+    why = "nearest fillet blob " + std::to_string(static_cast<int>(std::lround(nearest_mm))) +
+          " mm away";
+  }
+  // Blobs without a pose cannot be placed; their statuses say what the fillet became.
+  for (const BlobResult& blob : result.blobs) {
+    if (blob.status == BlobStatus::kFillet) continue;
+    why += (why.empty() ? "" : "; ") + std::string("a blob ") + std::string(to_string(blob.status));
+  }
+  return why.empty() ? "no blob" : why;
 }
 
 }  // namespace
@@ -73,7 +97,11 @@ void AccuracyTally::add_frame(const FrameResult& result, const std::vector<TrueF
         nearest = blob;
       }
     }
-    if (nearest == nullptr) continue;
+    if (nearest == nullptr) {
+      missed_.push_back({result.sequence, fillet.x_mm, fillet.y_mm, fillet.angle_rad,
+                         why_missed(result, blobs, fillet)});
+      continue;
+    }
     ++counts_.detected;
     const double error_rad =
         angle_between_rad(static_cast<double>(nearest->angle_rad), fillet.angle_rad);

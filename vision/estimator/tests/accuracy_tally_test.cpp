@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <numbers>
+#include <string>
 
 #include "fl/vision/accuracy.hpp"
 
@@ -92,6 +93,39 @@ TEST(AccuracyTally, AFilletCutByTheImageBorderIsNotJudged) {
   cut.fully_visible = false;
   tally.add_frame(FrameResult{}, {cut});
   EXPECT_EQ(tally.summary().singles, 0U);
+}
+
+TEST(AccuracyTally, AMissedSingleIsListedWithItsFrameAndWhatTheEstimatorSawInstead) {
+  AccuracyTally tally;
+  // Frame 11: the only fillet blob lies 40 mm off, beyond the 30 mm gate, and a second blob
+  // touched the image edge.
+  FrameResult frame;
+  frame.sequence = 11;
+  frame.blobs.push_back(fillet_blob(40.0F, 0.0F, 0.0F, Hand::kLeft, SideUp::kSkin));
+  BlobResult cut;
+  cut.status = BlobStatus::kCutByBorder;
+  frame.blobs.push_back(cut);
+  tally.add_frame(frame, {single(0.0, 0.0, 0.5, Hand::kLeft, SideUp::kSkin)});
+  // Frame 12 was refused as a whole.
+  FrameResult refused;
+  refused.sequence = 12;
+  refused.status = FrameStatus::kNoBelt;
+  tally.add_frame(refused, {single(5.0, 6.0, 0.0, Hand::kLeft, SideUp::kSkin)});
+  // Frame 13: nothing at all was found.
+  FrameResult empty;
+  empty.sequence = 13;
+  tally.add_frame(empty, {single(0.0, 0.0, 0.0, Hand::kLeft, SideUp::kSkin)});
+
+  const std::vector<MissedSingle>& missed = tally.missed_singles();
+  ASSERT_EQ(missed.size(), 3U);
+  EXPECT_EQ(missed[0].sequence, 11U);
+  EXPECT_DOUBLE_EQ(missed[0].angle_rad, 0.5);
+  EXPECT_EQ(missed[0].why, "nearest fillet blob 40 mm away; a blob cut by the image border");
+  EXPECT_EQ(missed[1].sequence, 12U);
+  EXPECT_DOUBLE_EQ(missed[1].x_mm, 5.0);
+  EXPECT_EQ(missed[1].why, "frame refused: " + std::string(to_string(FrameStatus::kNoBelt)));
+  EXPECT_EQ(missed[2].why, "no blob");
+  EXPECT_EQ(tally.summary().detected, 0U);  // a listed miss is still a miss
 }
 
 TEST(AccuracyTally, ATouchingGroupCountsOnceAndIsFlaggedOnlyWhenEveryBlobSaysSo) {

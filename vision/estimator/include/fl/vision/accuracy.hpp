@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "fl/controller/process_image.hpp"
@@ -72,6 +73,18 @@ struct AccuracySummary {
   double singulation_recall = 1.0;
 };
 
+// A single fillet wholly in view that no fillet blob matched, and what the estimator saw
+// instead (for finding the frame and the cause of a miss).
+struct MissedSingle {
+  std::uint32_t sequence = 0;  // the frame's sequence number
+  double x_mm = 0.0;           // the true pose
+  double y_mm = 0.0;
+  double angle_rad = 0.0;
+  // The frame's status when it was refused; else the nearest fillet blob's distance when one
+  // lay beyond the gate; else the statuses of the frame's blobs without a pose.
+  std::string why;
+};
+
 class AccuracyTally {
  public:
   explicit AccuracyTally(AccuracyOptions options = {}) : options_(options) {}
@@ -84,12 +97,14 @@ class AccuracyTally {
   [[nodiscard]] const std::vector<double>& position_errors_mm() const {
     return position_errors_mm_;
   }
+  [[nodiscard]] const std::vector<MissedSingle>& missed_singles() const { return missed_; }
 
  private:
   AccuracyOptions options_;
   AccuracySummary counts_;
   std::vector<double> angle_errors_deg_;
   std::vector<double> position_errors_mm_;
+  std::vector<MissedSingle> missed_;
 };
 
 // The smallest angle between two directions, in [0, pi].
