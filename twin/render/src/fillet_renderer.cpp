@@ -16,6 +16,11 @@ namespace fl::render {
 namespace {
 
 constexpr double kHeightCellMm = 0.25;  // height-map resolution, finer than any camera pixel
+// A silhouette counts as wholly in view when its outline keeps this clearance from the image
+// edge. The imaging chain (pixel supersampling, motion blur, noise) spreads an edge by about
+// 2 px, so a fillet nearer than that cannot be told from one the edge cuts: at 1 px the
+// estimator rightly called such fillets cut and the evaluation counted them missed.
+constexpr double kFullyVisibleMarginPx = 3.0;
 constexpr double kTextureCellMm = 0.5;  // material texture resolution
 constexpr int kSizeVariants = 3;
 
@@ -438,8 +443,9 @@ RenderedFrame FilletRenderer::render(const RenderCamera& camera, const Scene& sc
     truth.fully_visible = true;
     for (const auto& local : p.sprite->outline_mm) {
       const cv::Point2d px = belt_to_pixel(camera, to_belt(local));
-      if (px.x < 1.0 || px.y < 1.0 || px.x > camera.width_px - 2.0 ||
-          px.y > camera.height_px - 2.0) {
+      const double m = kFullyVisibleMarginPx;
+      if (px.x < m || px.y < m || px.x > camera.width_px - 1.0 - m ||
+          px.y > camera.height_px - 1.0 - m) {
         truth.fully_visible = false;
         break;
       }

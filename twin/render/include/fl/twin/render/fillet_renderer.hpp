@@ -120,7 +120,7 @@ struct Scene {
 // Ground truth for one fillet of a rendered frame.
 struct FilletTruth {
   FilletInstance fillet;
-  bool fully_visible = false;  // the whole silhouette lies inside the image (1 px margin)
+  bool fully_visible = false;  // the whole silhouette lies inside the image (3 px margin)
   bool singulated = true;      // no other fillet shares its group
   cv::Point2d centre_px;       // image position of the pose
   double silhouette_area_mm2 = 0.0;

@@ -39,8 +39,8 @@ enum class SensorMount { kLongSideAlongTravel, kLongSideAcrossTravel };
 struct TwinCameraSettings {
   int width_px = 640;
   int height_px = 480;
-  double field_along_travel_mm = 300.0;  // config/line.yaml's field_of_view_mm
-  SensorMount mount = SensorMount::kLongSideAlongTravel;
+  double field_along_travel_mm = 300.0;                    // config/line.yaml's field_of_view_mm
+  SensorMount mount = SensorMount::kLongSideAcrossTravel;  // the whole belt width in view
   render::BeltAppearance belt;
   render::ImagingConditions imaging;
   std::uint64_t seed = 1;  // the frame's texture and noise seed is seed + sequence
