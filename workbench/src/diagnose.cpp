@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -199,6 +200,29 @@ std::vector<EffectCandidate> candidates_for(ExperimentType type) {
                               " datasets");
 }
 
+std::size_t held_out_trial(const Dataset& dataset, const std::vector<double>& base_trial_rmse) {
+  if (dataset.trials.empty() || base_trial_rmse.size() != dataset.trials.size()) {
+    throw std::invalid_argument("held_out_trial: one base error per trial is needed");
+  }
+  std::optional<std::size_t> fastest;
+  double fastest_rate = 0.0;
+  for (std::size_t k = 0; k < dataset.trials.size(); ++k) {
+    const auto rate = dataset.trials[k].conditions.find("rate");
+    if (rate == dataset.trials[k].conditions.end()) continue;
+    const double value = std::get<double>(rate->second);
+    if (!fastest || value > fastest_rate) {
+      fastest = k;
+      fastest_rate = value;
+    }
+  }
+  if (fastest) return *fastest;
+  std::size_t worst = dataset.trials.size() - 1;
+  for (std::size_t k = 0; k < base_trial_rmse.size(); ++k) {
+    if (base_trial_rmse[k] > base_trial_rmse[worst]) worst = k;
+  }
+  return worst;
+}
+
 Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base,
                    const std::vector<EffectCandidate>& candidates, const DiagnoseOptions& options) {
   const std::string_view channel = judged_channel(dataset.experiment);
@@ -209,31 +233,26 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   diagnosis.channel = std::string(channel);
   const auto noise = dataset.noise_si.find(channel);
   diagnosis.noise_si = noise == dataset.noise_si.end() ? 0.0 : noise->second;
-  // The fastest trial is held out (the last one at the highest rate when rates differ): a
-  // fit on the slower ones must predict it. Without rates (slide), the last trial.
   std::vector<std::size_t> all_trials(dataset.trials.size());
-  for (std::size_t k = 0; k < all_trials.size(); ++k) all_trials[k] = k;
-  std::size_t held_out = all_trials.back();
-  double fastest = -1.0;
-  for (const std::size_t k : all_trials) {
-    const auto rate = dataset.trials[k].conditions.find("rate");
-    if (rate != dataset.trials[k].conditions.end() && std::get<double>(rate->second) > fastest) {
-      fastest = std::get<double>(rate->second);
-      held_out = k;
-    }
+  std::vector<double> base_trial_rmse(dataset.trials.size());
+  Residuals base_all;
+  for (std::size_t k = 0; k < all_trials.size(); ++k) {
+    all_trials[k] = k;
+    const Residuals trial = residuals(dataset, base, {k});
+    base_trial_rmse[k] = std::sqrt(trial.rss / static_cast<double>(trial.samples));
+    base_all.rss += trial.rss;
+    base_all.samples += trial.samples;
   }
+  const std::size_t held_out = held_out_trial(dataset, base_trial_rmse);
   diagnosis.held_out_trial = dataset.trials[held_out].id;
   std::vector<std::size_t> fit_trials;
   for (const std::size_t k : all_trials) {
     if (k != held_out) fit_trials.push_back(k);
   }
-
-  const Residuals base_all = residuals(dataset, base, all_trials);
-  const Residuals base_out = residuals(dataset, base, {held_out});
   diagnosis.samples = base_all.samples;
   diagnosis.base_rmse = std::sqrt(base_all.rss / static_cast<double>(base_all.samples));
   diagnosis.base_bic = bic(base_all.rss, base_all.samples, 0);
-  diagnosis.base_held_out_rmse = std::sqrt(base_out.rss / static_cast<double>(base_out.samples));
+  diagnosis.base_held_out_rmse = base_trial_rmse[held_out];
   spdlog::info("diagnose: base model RMS {:.4g} (SI) over {} samples, held out '{}'",
                diagnosis.base_rmse, diagnosis.samples, diagnosis.held_out_trial);
 

@@ -73,9 +73,17 @@ struct DiagnoseOptions {
   double min_held_out_gain = 0.2;
 };
 
+// The trial a fit on the others must predict. With rates: the fastest (the first of equals),
+// as extrapolating in rate is what a rate law is for. Without (slide): the trial the base
+// model misses by the most (base_trial_rmse, one per trial; the last of equals), so an effect
+// that shows under one condition only (a wet plate) is judged on a trial where it shows, and
+// is fitted on the others where it shows too. Throws std::invalid_argument when the errors do
+// not match the trials.
+std::size_t held_out_trial(const Dataset& dataset, const std::vector<double>& base_trial_rmse);
+
 // The channel judged, the twin and where the effect goes come from the experiment type
 // (compress: force, bond law; slide: onset_angle, fillet-equipment contact chain). The trial
-// held out is the fastest when trials have a rate, else the last. Throws
+// held out is held_out_trial's. Throws
 // std::invalid_argument for a dataset it cannot diagnose (compress and slide only, two trials
 // or more so one can be held out).
 Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base,
