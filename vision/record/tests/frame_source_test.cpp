@@ -258,17 +258,18 @@ TEST(TwinFrameSource, TruthAndEstimatorAgreeOnAFilletNearTheImageEdge) {
         estimator.estimate(frame->bgr, frame->time_ns, 1).to_camera_frame();
     return std::pair{source.last_truth().at(0).fully_visible, measured.count == 1};
   };
-  // Both ends and a long side towards the edge, on two noise seeds, just past the 3 px margin
-  // and beyond.
+  // Both ends and a long side towards the edge: 2.5 px is inside the margin; just past it
+  // (3.25 px, on two noise seeds) and well past it (5 px) the estimator must judge it. Twelve
+  // renders: the sanitizer build renders about ten times slower.
   for (const double angle_rad : {0.0, std::numbers::pi / 2, std::numbers::pi}) {
     scene.fillets_[0].angle_rad = angle_rad;
+    settings.seed = 1;
+    EXPECT_FALSE(judge(2.5).first) << angle_rad;
+    EXPECT_EQ(judge(5.0), std::pair(true, true)) << "angle " << angle_rad << " rad, 5 px";
     for (const std::uint64_t seed : {1, 2}) {
       settings.seed = seed;
-      EXPECT_FALSE(judge(2.5).first) << angle_rad;
-      for (const double clearance_px : {3.25, 3.5, 4.0, 5.0}) {
-        EXPECT_EQ(judge(clearance_px), std::pair(true, true))
-            << "angle " << angle_rad << " rad, seed " << seed << ", " << clearance_px << " px";
-      }
+      EXPECT_EQ(judge(3.25), std::pair(true, true))
+          << "angle " << angle_rad << " rad, seed " << seed << ", 3.25 px";
     }
   }
 }
