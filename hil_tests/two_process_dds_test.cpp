@@ -1,9 +1,11 @@
 // The controller and the twin as two processes over DDS (issue 5 item 5): `linectl control`
 // and `linectl twin serve --plant fast` on the loopback configuration, against the same seed
 // run in-process with `linectl run --plant fast`. Judged by the books (both balance) and the
-// KPIs (docs/dds.md, "Two-process mode", for the tolerances and the measured spread).
+// KPIs (docs/dds.md, "Two-process mode", for the tolerances and the measured spread); and
+// each process losing the other mid-run, judged by its safe reaction.
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -29,7 +31,8 @@ namespace fs = std::filesystem;
 // share and the 1-point tolerance is not met by luck of small numbers alone.
 constexpr const char* kDuration = "60s";
 constexpr std::uint64_t kSeed = 1;
-// Its own DDS domain: the dds tests use 11-42, the benchmarks 77 and 78.
+// Its own DDS domain (the peer-loss tests below use 51 and 52): the dds tests use 11-42, the
+// benchmarks 77 and 78.
 constexpr const char* kDomain = "50";
 // SCHED_FIFO for the controller's scan and, one below it, the twin's tick loop: on a shared
 // machine a compile job must not push either past a period. Without CAP_SYS_NICE both log the
@@ -152,6 +155,74 @@ TEST(TwoProcessDds, ControlAndTwinOverLoopbackMatchTheInProcessRun) {
       reaction["p50"].get<double>(), reaction["p99"].get<double>(), reaction["max"].get<double>(),
       reaction["count"].get<int>(), twin_kpis["twin"]["command_transport_us"]["p50"].get<double>(),
       twin_kpis["twin"]["command_transport_us"]["p99"].get<double>());
+}
+
+// One side of a two-process run dies mid-run (SIGKILL: no goodbye on the bus). Each process
+// must see it within its stale limit and take its safe reaction on its own.
+struct PeerLossRun {
+  int control_exit = -1;
+  int twin_exit = -1;
+  nlohmann::json control;
+  nlohmann::json twin;
+  std::string logs;
+};
+
+PeerLossRun run_and_kill(const std::string& name, const std::string& domain, bool kill_twin) {
+  const fs::path dir = fs::path(FL_TEST_WORK_DIR) / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  // 30 s of feeding that is never reached: the kill comes after about 6 s of it.
+  const std::string duration = "30s";
+  const pid_t control = spawn(
+      {FL_LINECTL, "control", "--duration", duration, "--domain", domain, "--fifo", kControlFifo,
+       "--json", (dir / "control.json").string(), "--ledger", (dir / "ledger.csv").string()},
+      dir / "control.log");
+  const pid_t twin =
+      spawn({FL_LINECTL, "twin", "serve", "--plant", "fast", "--seed", "1", "--duration", duration,
+             "--domain", domain, "--fifo", kTwinFifo, "--json", (dir / "twin.json").string()},
+            dir / "twin.log");
+  // Discovery and start-up take about a second; by 8 s fillets are on every belt.
+  ::sleep(8);
+  ::kill(kill_twin ? twin : control, SIGKILL);
+  PeerLossRun run;
+  run.twin_exit = wait_exit(twin);
+  run.control_exit = wait_exit(control);
+  run.logs = "control:\n" + text(dir / "control.log") + "\ntwin:\n" + text(dir / "twin.log");
+  if (!kill_twin) run.twin = load(dir / "twin.json");
+  if (kill_twin) run.control = load(dir / "control.json");
+  return run;
+}
+
+TEST(TwoProcessDds, ControllerFaultsAndStopsWhenTheTwinDies) {
+  ASSERT_NE(std::getenv("CYCLONEDDS_URI"), nullptr) << "run through ctest";
+  const PeerLossRun run = run_and_kill("twin_killed", "51", true);
+  EXPECT_EQ(run.twin_exit, 128 + SIGKILL);
+  // docs/dds.md: no LineSensors for 200 ms reads as an open safety chain; the controller
+  // faults, stops every drive and ends the run; exit 4 says the peer was lost.
+  ASSERT_EQ(run.control_exit, 4) << run.logs;
+  SCOPED_TRACE(run.control.dump());
+  EXPECT_TRUE(run.control["runtime"]["line_faulted"].get<bool>());
+  EXPECT_GT(run.control["dds"]["sensors_stale_scans"].get<int>(), 0);
+  // Nothing vanishes from the books: what was in transit is closed, every record written.
+  EXPECT_TRUE(run.control["ledger"]["balanced"].get<bool>());
+  EXPECT_EQ(run.control["ledger"]["records_dropped"].get<int>(), 0);
+  EXPECT_GT(run.control["ledger"]["items_closed"].get<int>(), 0);
+}
+
+TEST(TwoProcessDds, TwinStopsTheBeltsWhenTheControllerDies) {
+  ASSERT_NE(std::getenv("CYCLONEDDS_URI"), nullptr) << "run through ctest";
+  const PeerLossRun run = run_and_kill("control_killed", "52", false);
+  EXPECT_EQ(run.control_exit, 128 + SIGKILL);
+  ASSERT_EQ(run.twin_exit, 4) << run.logs;  // docs/dds.md: 4, the controller was lost
+  SCOPED_TRACE(run.twin.dump());
+  // docs/dds.md: the twin holds the last command 100 ms, then applies the safe output image
+  // (every drive disabled), as a drive's command timeout would; the belts stand and the run
+  // ends a second later, long before the 30 s of feeding.
+  EXPECT_TRUE(run.twin["twin"]["controller_lost"].get<bool>());
+  EXPECT_GT(run.twin["twin"]["stale_ticks"].get<int>(), 0);
+  EXPECT_LT(run.twin["simulated_s"].get<double>(), 20.0);
+  EXPECT_TRUE(run.twin["truth"]["balanced"].get<bool>());  // every fillet fed is accounted for
+  EXPECT_GT(run.twin["truth"]["on_line_at_end"].get<int>(), 0);  // stopped, not emptied
 }
 
 }  // namespace
