@@ -188,8 +188,12 @@ PeerLossRun run_and_kill(const std::string& name, const std::string& domain, boo
   run.twin_exit = wait_exit(twin);
   run.control_exit = wait_exit(control);
   run.logs = "control:\n" + text(dir / "control.log") + "\ntwin:\n" + text(dir / "twin.log");
-  if (!kill_twin) run.twin = load(dir / "twin.json");
-  if (kill_twin) run.control = load(dir / "control.json");
+  // Only the survivor wrote its JSON.
+  if (kill_twin) {
+    run.control = load(dir / "control.json");
+  } else {
+    run.twin = load(dir / "twin.json");
+  }
   return run;
 }
 

@@ -24,8 +24,8 @@ struct RecordArgs {
   std::vector<std::string> cameras{"orientation"};
   int width_px = 640;
   int height_px = 480;
-  // Twin cameras: the sensor's long side along the belt (225 mm across at 4:3) or across it
-  // (all 400 mm; not the default yet: see docs/vision.md "Twin cameras")
+  // Twin cameras: the sensor's long side across the belt (all 400 mm; the default) or along
+  // it (225 mm across at 4:3); docs/vision.md "Twin cameras"
   std::string sensor_mount = "across";
   double noise_sigma = 0.0;            // sensor noise of the rendered frames, grey levels
   double belt_grain = 0.0;             // belt texture amplitude of the rendered frames

@@ -253,9 +253,9 @@ TEST_F(Vcan, MasterStartsEmulatedLineCommandsItAndDetectsALostNode) {
     return scans;
   };
   run_scans(30);
-  const int extra_scans_to_run =
+  const int settling_scans =
       scans_until([&] { return in.estop_ok && in.drives[index(DriveId::kGuide)].ready; });
-  std::printf("VCAN: line ready and E-stop chain closed after %d scans\n", 30 + extra_scans_to_run);
+  std::printf("VCAN: line ready and E-stop chain closed after %d scans\n", 30 + settling_scans);
   devices.with_devices([](auto& drives, auto&) {
     // 0.25 m/s * 10000 counts/s per m/s.
     EXPECT_EQ(drives[index(DriveId::kGuide)]->state().target_velocity, 2500);

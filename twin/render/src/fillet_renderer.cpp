@@ -17,9 +17,8 @@ namespace {
 
 constexpr double kHeightCellMm = 0.25;  // height-map resolution, finer than any camera pixel
 // A silhouette counts as wholly in view when its outline keeps this clearance from the image
-// edge. The imaging chain (pixel supersampling, motion blur, noise) spreads an edge by about
-// 2 px, so a fillet nearer than that cannot be told from one the edge cuts: at 1 px the
-// estimator rightly called such fillets cut and the evaluation counted them missed.
+// edge. With 1 px the evaluation counted a fillet missed whose broad side lay under 3 px from
+// the edge: its mask reached the edge and the estimator rightly called it cut (docs/vision.md).
 constexpr double kFullyVisibleMarginPx = 3.0;
 constexpr double kTextureCellMm = 0.5;  // material texture resolution
 constexpr int kSizeVariants = 3;

@@ -80,8 +80,8 @@ struct MissedSingle {
   double x_mm = 0.0;           // the true pose
   double y_mm = 0.0;
   double angle_rad = 0.0;
-  // The frame's status when it was refused; else the nearest fillet blob's distance when one
-  // lay beyond the gate; else the statuses of the frame's blobs without a pose.
+  // The frame's status when it was refused; else the nearest fillet blob's distance (beyond
+  // the gate) and the statuses of the frame's blobs without a pose; "no blob" when neither.
   std::string why;
 };
 
