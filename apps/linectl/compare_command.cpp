@@ -52,8 +52,9 @@ std::optional<WorkbenchInputs> load_inputs(const CompareArgs& args) {
   inputs.common.sub_particle_radius_m = args.radius_mm * 1e-3;
   inputs.common.thread_count = args.threads;
   if (inputs.dataset.experiment != ExperimentType::kCompress &&
-      inputs.dataset.experiment != ExperimentType::kSlide) {
-    spdlog::error("{}: the twin does not reproduce {} datasets yet (compress and slide only)",
+      inputs.dataset.experiment != ExperimentType::kSlide &&
+      inputs.dataset.experiment != ExperimentType::kDrop) {
+    spdlog::error("{}: the twin does not reproduce {} datasets yet (compress, slide, drop)",
                   args.dataset, to_string(inputs.dataset.experiment));
     return std::nullopt;
   }
@@ -89,15 +90,17 @@ CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args) {
   CLI::App* dataset = app.add_subcommand("dataset", "measurement dataset tools");
   dataset->require_subcommand(1);
   CLI::App* generate = dataset->add_subcommand(
-      "generate", "write a synthetic compress or slide dataset with a hidden effect");
+      "generate", "write a synthetic compress, slide or drop dataset with a hidden effect");
   generate->add_option("--out", args.out, "dataset folder to write")->required();
-  generate->add_option("--experiment", args.experiment, "compress or slide")
-      ->check(CLI::IsMember({"compress", "slide"}));
+  generate->add_option("--experiment", args.experiment, "compress, slide or drop")
+      ->check(CLI::IsMember({"compress", "slide", "drop"}));
   generate->add_option("--effect", args.effect, "random, none, or an effect law");
   generate->add_option("--seed", args.seed, "random seed (effect, parameters, noise)");
   generate->add_option("--force-noise-n", args.force_noise_n, "1-sigma force noise in N")
       ->check(CLI::Range(0.0, 10.0));
   generate->add_option("--angle-noise-deg", args.angle_noise_deg, "slide: 1-sigma angle noise")
+      ->check(CLI::Range(0.0, 10.0));
+  generate->add_option("--height-noise-mm", args.height_noise_mm, "drop: 1-sigma height noise")
       ->check(CLI::Range(0.0, 10.0));
   return dataset;
 }
@@ -109,6 +112,7 @@ int generate_command(const GenerateArgs& args) {
   options.experiment = *experiment_from_string(args.experiment);  // checked by the option
   options.force_noise_n = args.force_noise_n;
   options.angle_noise_deg = args.angle_noise_deg;
+  options.height_noise_mm = args.height_noise_mm;
   options.common.base_spec = dem::load_model_spec(default_config("dem.yaml"));
   const GeneratedDataset made = generate_dataset(options);
   write_dataset(made.dataset, args.out);

@@ -34,6 +34,7 @@ struct GenerateArgs {
   std::uint64_t seed = 1;
   double force_noise_n = 0.01;
   double angle_noise_deg = 0.3;
+  double height_noise_mm = 0.5;
 };
 
 CLI::App* add_compare_subcommand(CLI::App& app, CompareArgs& args);

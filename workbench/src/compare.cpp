@@ -15,6 +15,29 @@ namespace {
 // test machine holding position still jitters by a few encoder counts.
 constexpr double kHoldRateShare = 0.05;
 
+// A drop's phases from its condition, not from the noisy track: released at rest, the fillet's
+// lowest point meets the plate after sqrt(2 h / g); the landing (impact, rebound, the flapping
+// of the ends) is the next 100 ms, then it settles.
+constexpr double kGravityMps2 = 9.81;  // as config/dem.yaml
+constexpr double kLandingS = 0.1;
+
+std::vector<std::string> drop_phases(const Trial& trial) {
+  const std::size_t rows = trial.data.rows();
+  const auto height = trial.conditions.find("drop_height");
+  if (height == trial.conditions.end()) return std::vector<std::string>(rows, "all");
+  const double impact_s = std::sqrt(2.0 * std::get<double>(height->second) / kGravityMps2);
+  const std::vector<double>& t = trial.data.at("time").values_si;
+  std::vector<std::string> phase(rows);
+  for (std::size_t k = 0; k < rows; ++k) {
+    if (t[k] < impact_s) {
+      phase[k] = "fall";
+    } else {
+      phase[k] = t[k] < impact_s + kLandingS ? "landing" : "settling";
+    }
+  }
+  return phase;
+}
+
 struct Accumulator {
   std::size_t samples = 0;
   double sum_sq = 0.0;
@@ -84,6 +107,7 @@ std::vector<std::string_view> response_channels(ExperimentType type) {
 
 std::vector<std::string> phases_of(ExperimentType type, const Trial& trial) {
   const std::size_t rows = trial.data.rows();
+  if (type == ExperimentType::kDrop) return drop_phases(trial);
   std::vector<std::string> phase(rows, "all");
   if (type != ExperimentType::kCompress || rows < 2) return phase;
   const std::vector<double>& t = trial.data.at("time").values_si;

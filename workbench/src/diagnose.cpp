@@ -15,48 +15,14 @@
 
 #include "fl/twin/dem/config.hpp"
 #include "fl/workbench/twin_models.hpp"
+#include "residuals.hpp"
 
 namespace fl::workbench {
 namespace {
 
-// The channel judged for an experiment type (the twin and where an effect goes follow from
-// the type too: make_twin_model, with_experiment_effect).
-std::string_view judged_channel(ExperimentType type) {
-  switch (type) {
-    case ExperimentType::kCompress:
-      return "force";
-    case ExperimentType::kSlide:
-      return "onset_angle";
-    default:
-      throw std::invalid_argument("diagnose handles compress and slide datasets, not " +
-                                  std::string(to_string(type)));
-  }
-}
-
-struct Residuals {
-  double rss = 0.0;
-  std::size_t samples = 0;
-};
-
-// Sum of squared residuals of the judged channel over the chosen trials.
-Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& common,
-                    const std::vector<std::size_t>& trials) {
-  const std::string_view channel = judged_channel(dataset.experiment);
-  const std::unique_ptr<TrialModel> model = make_twin_model(dataset.experiment, common);
-  Residuals r;
-  for (const std::size_t index : trials) {
-    const Trial& trial = dataset.trials[index];
-    const Table predicted = model->run(dataset, trial);
-    const std::vector<double>& measured = trial.data.at(channel).values_si;
-    const std::vector<double>& modelled = predicted.at(channel).values_si;
-    for (std::size_t k = 0; k < measured.size(); ++k) {
-      const double e = modelled[k] - measured[k];
-      r.rss += e * e;
-    }
-    r.samples += measured.size();
-  }
-  return r;
-}
+using detail::judged_channel;
+using detail::Residuals;
+using detail::residuals;
 
 double bic(double rss, std::size_t samples, std::size_t parameters) {
   const auto n = static_cast<double>(samples);
@@ -195,7 +161,10 @@ std::vector<EffectCandidate> slide_candidates() {
 
 std::vector<EffectCandidate> candidates_for(ExperimentType type) {
   if (type == ExperimentType::kSlide) return slide_candidates();
-  if (type == ExperimentType::kCompress) return compress_candidates();
+  // A drop loads the same bonds as a compression, at impact rates: the same bond laws.
+  if (type == ExperimentType::kCompress || type == ExperimentType::kDrop) {
+    return compress_candidates();
+  }
   throw std::invalid_argument("no effect candidates for " + std::string(to_string(type)) +
                               " datasets");
 }

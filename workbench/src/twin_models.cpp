@@ -31,7 +31,7 @@ std::string label_condition(const Conditions& conditions, std::string_view name,
 
 // model_tests' variant index (thesis_fillet_variants order: each size left, then mirrored)
 // from the trial's variant label and mirrored flag; the absent ones keep the base model's.
-std::size_t slide_variant(const Conditions& conditions, std::size_t base_variant) {
+std::size_t fillet_variant(const Conditions& conditions, std::size_t base_variant) {
   static constexpr std::string_view kSizes[] = {"144x72x40", "172x72x32", "176x72x40"};
   std::size_t size = base_variant / 2;
   bool mirrored = base_variant % 2 == 1;
@@ -62,27 +62,35 @@ std::string law_text(const dem::LawSpec& law) {
   return text.str();
 }
 
+// The spec describes the dry plate; a wet_film law in it is the film a wet plate carries, so it
+// is taken out for trials that are not wet (no surface condition: dry).
+void keep_wet_film_for_wet_trials(dem::ModelSpec& spec, const Conditions& conditions) {
+  if (label_condition(conditions, "surface", "dry") == "wet") return;
+  const std::uint32_t equipment = model_tests::equipment_type(spec);
+  for (dem::InteractionSpec& interaction : spec.interactions) {
+    if (!model_tests::is_fillet_with(interaction, equipment)) continue;
+    std::erase_if(interaction.contact_laws,
+                  [](const dem::LawSpec& law) { return law.name == "wet_film"; });
+  }
+}
+
+// The bond law of the spec with its parameters, for describe().
+std::string bond_law_text(const dem::ModelSpec& spec) {
+  for (const dem::InteractionSpec& interaction : spec.interactions) {
+    if (interaction.bond_law) return law_text(*interaction.bond_law);
+  }
+  return "none";
+}
+
 }  // namespace
 
 TwinCompressModel::TwinCompressModel(model_tests::CommonParams common)
     : common_(std::move(common)) {}
 
 std::string TwinCompressModel::describe() const {
-  const dem::ModelSpec spec = model_tests::make_spec(common_);
   std::ostringstream text;
   text << "DEM twin, bonded block of " << common_.sub_particle_radius_m * 1e3
-       << " mm sub-particles; bond law";
-  for (const dem::InteractionSpec& interaction : spec.interactions) {
-    if (!interaction.bond_law) continue;
-    text << " " << interaction.bond_law->name << " (";
-    bool first = true;
-    for (const auto& [key, value] : interaction.bond_law->parameters) {
-      text << (first ? "" : ", ") << key << " " << value;
-      first = false;
-    }
-    text << ")";
-    break;
-  }
+       << " mm sub-particles; bond law " << bond_law_text(model_tests::make_spec(common_));
   return text.str();
 }
 
@@ -140,19 +148,18 @@ Table TwinSlideModel::run(const Dataset& dataset, const Trial& trial) {
   const Channel& measured = trial.data.at("onset_angle");
   model_tests::SlideParams params;
   params.common = common_;
-  params.common.variant = slide_variant(trial.conditions, common_.variant);
+  params.common.variant = fillet_variant(trial.conditions, common_.variant);
   params.tilt_rate_deg_per_s = settings_.tilt_rate_deg_per_s;
   params.max_angle_deg = settings_.max_angle_deg;
-  const bool wet = label_condition(trial.conditions, "surface", "dry") == "wet";
   dem::ModelSpec& spec = params.common.base_spec;
   const std::uint32_t equipment = model_tests::equipment_type(spec);
   // run_slide sets the fillet-equipment coulomb friction and jkr energy itself: hand it the
   // spec's own, so the spec is the one source of the model.
+  keep_wet_film_for_wet_trials(spec, trial.conditions);
   std::optional<double> friction, surface_energy;
   for (dem::InteractionSpec& interaction : spec.interactions) {
     if (!model_tests::is_fillet_with(interaction, equipment)) continue;
     std::vector<dem::LawSpec>& laws = interaction.contact_laws;
-    if (!wet) std::erase_if(laws, [](const dem::LawSpec& law) { return law.name == "wet_film"; });
     const auto coulomb = std::find_if(
         laws.begin(), laws.end(), [](const dem::LawSpec& law) { return law.name == "coulomb"; });
     const auto static_kinetic = std::find_if(laws.begin(), laws.end(), [](const dem::LawSpec& law) {
@@ -192,6 +199,47 @@ Table TwinSlideModel::run(const Dataset& dataset, const Trial& trial) {
   return table;
 }
 
+TwinDropModel::TwinDropModel(model_tests::CommonParams common) : common_(std::move(common)) {
+  if (common_.base_spec.materials.empty()) common_.base_spec = dem::appendix_b_model_spec();
+}
+
+std::string TwinDropModel::describe() const {
+  std::ostringstream text;
+  text << "DEM twin, flat drop of a flexible fillet of " << common_.sub_particle_radius_m * 1e3
+       << " mm sub-particles; bond law " << bond_law_text(common_.base_spec);
+  return text.str();
+}
+
+Table TwinDropModel::run(const Dataset& dataset, const Trial& trial) {
+  if (dataset.experiment != ExperimentType::kDrop) {
+    throw std::runtime_error("the drop model runs drop datasets, not " +
+                             std::string(to_string(dataset.experiment)));
+  }
+  const auto height = trial.conditions.find("drop_height");
+  if (height == trial.conditions.end()) {
+    throw std::runtime_error("the drop model needs the trial's drop_height condition");
+  }
+  model_tests::DropParams params;
+  params.common = common_;
+  params.common.variant = fillet_variant(trial.conditions, common_.variant);
+  keep_wet_film_for_wet_trials(params.common.base_spec, trial.conditions);
+  params.drop_height_m = std::get<double>(height->second);
+  params.speed_m_per_s = 0.0;  // released at rest, also from 0 height (1 mm up)
+  params.orientation = Eigen::Quaterniond::Identity();  // flat, as the fillet lies on a belt
+  params.height_times_s = trial.data.at("time").values_si;
+  params.duration_s = 0.0;  // to the last measured time
+  const model_tests::DropResult result = model_tests::run_drop(params);
+  if (result.centre_height_m.size() != trial.data.rows()) {
+    throw std::runtime_error("the drop model became unstable after " +
+                             std::to_string(result.centre_height_m.size()) + " of " +
+                             std::to_string(trial.data.rows()) + " rows");
+  }
+  Table table;
+  table.channels.push_back({"height", trial.data.at("height").unit, result.centre_height_m});
+  table.lines = trial.data.lines;
+  return table;
+}
+
 std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
                                             const model_tests::CommonParams& common) {
   switch (experiment) {
@@ -199,6 +247,8 @@ std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
       return std::make_unique<TwinCompressModel>(common);
     case ExperimentType::kSlide:
       return std::make_unique<TwinSlideModel>(common);
+    case ExperimentType::kDrop:
+      return std::make_unique<TwinDropModel>(common);
     default:
       throw std::invalid_argument("the twin does not reproduce " +
                                   std::string(to_string(experiment)) + " datasets yet");

@@ -1,4 +1,4 @@
-// Fixtures shared by the workbench tests: the base DEM model of the compression and slide
+// Fixtures shared by the workbench tests: the base DEM model of the compression, slide and drop
 // tests, datasets generated with a hidden effect, and the score a model with a given effect gets on
 // them.
 #pragma once
@@ -63,6 +63,29 @@ inline double angle_score(const Dataset& data, const HiddenEffect& effect) {
   common.base_spec = with_contact_effect(common.base_spec, effect);
   TwinSlideModel model(common);
   return compare(data, model).overall("onset_angle").score;
+}
+
+// Height noise of the generated drop datasets (the generator's default, a 200 fps camera
+// tracking the fillet), in millimetres.
+inline constexpr double kHeightNoiseMm = 0.5;
+
+// A drop dataset (50, 100 and 200 mm, flat) with `effect` hidden in it.
+inline GeneratedDataset generate_drop(const std::string& effect, std::uint64_t seed = 3) {
+  GeneratorOptions options;
+  options.experiment = ExperimentType::kDrop;
+  options.seed = seed;
+  options.effect = effect;
+  options.height_noise_mm = kHeightNoiseMm;
+  options.common = base_model();
+  return generate_dataset(options);
+}
+
+// The overall height score of the drop twin with the bond `effect` added.
+inline double height_score(const Dataset& data, const HiddenEffect& effect) {
+  model_tests::CommonParams common = base_model();
+  common.base_spec = with_bond_effect(common.base_spec, effect);
+  TwinDropModel model(common);
+  return compare(data, model).overall("height").score;
 }
 
 }  // namespace fl::workbench::test

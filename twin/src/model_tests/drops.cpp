@@ -36,8 +36,30 @@ DropResult run_drop(const DropParams& params) {
       std::max(1.0, std::round(params.sample_interval_s / spec.timestep_s)));
   std::vector<std::pair<double, double>> kinetic;  // (time, J)
   double impact_time = -1.0, impact_kinetic = 0.0;
-  while (sim.state().time_s < params.duration_s) {
-    sim.step(steps_per_sample);
+  const std::vector<double>& height_times = params.height_times_s;
+  const double end_s =
+      std::max(params.duration_s, height_times.empty() ? 0.0 : height_times.back());
+  const double half_step_s = 0.5 * spec.timestep_s;
+  std::size_t next_height = 0;
+  // Heights at the requested times (to the nearest step), kinetic samples between them.
+  const auto record_heights = [&] {
+    while (next_height < height_times.size() &&
+           sim.state().time_s >= height_times[next_height] - half_step_s) {
+      result.centre_height_m.push_back(centroid_m(sim.state()).z());
+      ++next_height;
+    }
+  };
+  record_heights();
+  while (sim.state().time_s < end_s - half_step_s) {
+    std::size_t steps = steps_per_sample;
+    if (next_height < height_times.size()) {
+      const double to_next_s = height_times[next_height] - sim.state().time_s;
+      steps = std::clamp<std::size_t>(
+          static_cast<std::size_t>(std::max(0LL, std::llround(to_next_s / spec.timestep_s))), 1,
+          steps_per_sample);
+    }
+    sim.step(steps);
+    record_heights();
     const double share = intact_bond_share(sim.state());
     result.min_intact_bond_share = std::min(result.min_intact_bond_share, share);
     const double e = kinetic_energy_j(sim.energy());

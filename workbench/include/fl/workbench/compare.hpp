@@ -34,7 +34,8 @@ class TrialModel {
 std::vector<std::string_view> response_channels(ExperimentType type);
 
 // Phase of each row: compress has "loading", "hold" and "unloading" (from the measured
-// displacement's rate); other experiments one phase, "all".
+// displacement's rate); drop has "fall", "landing" (100 ms from the impact, which the
+// drop_height gives) and "settling"; other experiments one phase, "all".
 std::vector<std::string> phases_of(ExperimentType type, const Trial& trial);
 
 struct ChannelTrace {

@@ -36,7 +36,8 @@ std::vector<EffectCandidate> compress_candidates();
 // The contact-law effects for a slide dataset (static_kinetic_friction, wet_film,
 // rolling_resistance), bounds as wide.
 std::vector<EffectCandidate> slide_candidates();
-// The candidates of a dataset's experiment; throws std::invalid_argument for other types.
+// The candidates of a dataset's experiment (drop: compress_candidates, a drop loads the same
+// bonds at impact rates); throws std::invalid_argument for other types.
 std::vector<EffectCandidate> candidates_for(ExperimentType type);
 
 struct CandidateResult {
@@ -82,10 +83,10 @@ struct DiagnoseOptions {
 std::size_t held_out_trial(const Dataset& dataset, const std::vector<double>& base_trial_rmse);
 
 // The channel judged, the twin and where the effect goes come from the experiment type
-// (compress: force, bond law; slide: onset_angle, fillet-equipment contact chain). The trial
-// held out is held_out_trial's. Throws
-// std::invalid_argument for a dataset it cannot diagnose (compress and slide only, two trials
-// or more so one can be held out).
+// (compress: force, bond law; slide: onset_angle, fillet-equipment contact chain; drop:
+// height, bond law). The trial held out is held_out_trial's. Throws std::invalid_argument for
+// a dataset it cannot diagnose (compress, slide and drop only, two trials or more so one can
+// be held out).
 Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base,
                    const std::vector<EffectCandidate>& candidates,
                    const DiagnoseOptions& options = {});

@@ -51,7 +51,23 @@ class TwinSlideModel final : public TrialModel {
   SlideSettings settings_;
 };
 
-// The twin of an experiment type (compress, slide): what compare, diagnose and the generator
+// Drop test (thesis 3.4.1's settle test, tracked by a camera): a fillet of the trial's `variant`
+// and `mirrored` flag released at rest lying flat, its lowest point `drop_height` above a plate
+// of the equipment material; the answer is the height of the fillet's centre (the mean of its
+// sphere centres) above the plate at every measured time. The time column counts from the
+// release. Bond laws (and effects among them) and the fillet-equipment laws are the spec's; a
+// wet_film law acts on surface=wet trials only, as in the slide model.
+class TwinDropModel final : public TrialModel {
+ public:
+  explicit TwinDropModel(model_tests::CommonParams common);
+  [[nodiscard]] std::string describe() const override;
+  Table run(const Dataset& dataset, const Trial& trial) override;
+
+ private:
+  model_tests::CommonParams common_;
+};
+
+// The twin of an experiment type (compress, slide, drop): what compare, diagnose and the generator
 // run. Throws std::invalid_argument for a type the twin does not reproduce yet.
 std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
                                             const model_tests::CommonParams& common);

@@ -184,6 +184,11 @@ struct DropParams {
   // Timestep as a multiple of the bond critical step (overrides the common choice).
   std::optional<double> timestep_factor_of_bond_critical;
   double sample_interval_s = 0.005;
+  // Times after release (ascending) at which the height of the fillet's centre (the mean of
+  // its sphere centres, as a camera tracks it) above the floor is recorded
+  // (DropResult::centre_height_m).
+  // The run lasts to the later of duration_s and the last of them.
+  std::vector<double> height_times_s;
 };
 
 struct DropResult {
@@ -193,6 +198,7 @@ struct DropResult {
   double timestep_s = 0.0;
   double bond_critical_step_s = 0.0;
   std::size_t particles = 0;
+  std::vector<double> centre_height_m;  // at DropParams::height_times_s
 };
 
 DropResult run_drop(const DropParams& params);
