@@ -10,7 +10,9 @@
 
 #include "cli_support.hpp"
 #include "fl/controller/yaml_reader.hpp"
+#include "fl/report/csv.hpp"
 #include "fl/twin/dem/config.hpp"
+#include "fl/workbench/calibrate.hpp"
 #include "fl/workbench/diagnose.hpp"
 #include "fl/workbench/generator.hpp"
 #include "fl/workbench/history.hpp"
@@ -161,6 +163,82 @@ int diagnose_command(const CompareArgs& args) {
                  snippet);
   }
   spdlog::info("diagnosis: {}", (out / "diagnosis.json").string());
+  return 0;
+}
+
+CLI::App* add_calibrate_subcommand(CLI::App& app, CalibrateArgs& args) {
+  CLI::App* command = app.add_subcommand(
+      "calibrate", "fit base parameters of the DEM model to a dataset (design of experiments)");
+  add_model_options(*command, args.model);
+  command
+      ->add_option("--param", args.params,
+                   "ADDRESS=MIN:MAX[:log], ADDRESS bond.KEY, fillet_equipment.LAW.KEY or "
+                   "fillet_fillet.LAW.KEY (repeat for each parameter)")
+      ->required();
+  command->add_option("--design", args.design, "hammersley or factorial")
+      ->check(CLI::IsMember({"hammersley", "factorial"}));
+  command->add_option("--points", args.points, "Hammersley points")->check(CLI::Range(1, 4096));
+  command->add_option("--levels", args.levels, "factorial levels per parameter")
+      ->check(CLI::Range(1, 64));
+  command
+      ->add_option("--local-evaluations", args.local_evaluations,
+                   "twin evaluations of the local fit after the design (0: none)")
+      ->check(CLI::Range(0, 10000));
+  return command;
+}
+
+int calibrate_command(const CalibrateArgs& args) {
+  std::vector<CalibratedParameter> parameters;
+  for (const std::string& text : args.params) {
+    try {
+      parameters.push_back(parse_calibrated_parameter(text));
+    } catch (const std::invalid_argument& error) {
+      spdlog::error("--param: {}", error.what());
+      return 2;
+    }
+  }
+  const std::optional<WorkbenchInputs> inputs = load_inputs(args.model);
+  if (!inputs) return 2;
+  CalibrationOptions options;
+  options.design =
+      args.design == "factorial" ? DesignKind::kFullFactorial : DesignKind::kHammersley;
+  options.hammersley_points = args.points;
+  options.factorial_levels = args.levels;
+  options.max_local_evaluations = args.local_evaluations;
+  Calibration result;
+  try {
+    result = calibrate(inputs->dataset, inputs->common, parameters, options);
+  } catch (const std::invalid_argument& error) {
+    spdlog::error("{}", error.what());
+    return 2;
+  }
+  const fs::path out = out_folder(args.model, "calibrate_");
+  fs::create_directories(out);
+  std::ofstream(out / "calibration.json") << calibration_json(result) << "\n";
+  {
+    std::vector<std::string> header;
+    for (const CalibratedParameter& p : parameters) header.push_back(p.address);
+    header.emplace_back("rmse_si");
+    std::ofstream design(out / "design.csv");
+    for (std::size_t k = 0; k < header.size(); ++k) design << (k ? "," : "") << header[k];
+    design << ",failure\n";
+    for (const DesignRun& run : result.design) {
+      for (const double value : run.values) design << report::format_double(value) << ",";
+      design << (run.failure.empty() ? report::format_double(run.rmse) : "") << ",\"" << run.failure
+             << "\"\n";
+    }
+  }
+  spdlog::info("calibrated {} ({}): RMS {:.4g} -> {:.4g} (SI), noise {:.4g}, {} twin evaluations",
+               args.model.dataset, result.channel, result.base_rmse, result.rmse, result.noise_si,
+               result.evaluations);
+  std::string change;
+  for (std::size_t p = 0; p < parameters.size(); ++p) {
+    change += fmt::format("  {}: {:.6g} -> {:.6g}\n", parameters[p].address, result.base_values[p],
+                          result.best[p]);
+  }
+  spdlog::info("to take it, set these in config/dem.yaml (every law the address names):\n{}",
+               change);
+  spdlog::info("calibration: {}", (out / "calibration.json").string());
   return 0;
 }
 

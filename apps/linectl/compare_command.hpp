@@ -6,16 +6,21 @@
 //   linectl diagnose DATASET [--out DIR] [...]
 //     fits each candidate effect the model lacks and says which one explains the failure
 //     (DIR/diagnosis.json), with the config/dem.yaml change that adds it.
-//   linectl dataset generate --out DIR [--experiment compress|slide]
+//   linectl calibrate DATASET --param ADDRESS=MIN:MAX[:log] ... [--design hammersley|factorial]
+//     fits base parameters of the model (bond stiffness, friction, surface energy) by a design
+//     of experiments and a local fit (DIR/calibration.json, DIR/design.csv), with the
+//     config/dem.yaml change.
+//   linectl dataset generate --out DIR [--experiment compress|slide|drop]
 //                            [--effect random|none|LAW] [--seed N]
-//     a synthetic compress or slide dataset with a hidden effect; the truth in DIR.truth.yaml.
-// compare and diagnose take compress and slide datasets (the twin and the candidate effects
-// follow the dataset's experiment).
+//     a synthetic dataset with a hidden effect; the truth in DIR.truth.yaml.
+// compare, diagnose and calibrate take compress, slide and drop datasets (the twin and the
+// candidate effects follow the dataset's experiment).
 #pragma once
 
 #include <CLI/CLI.hpp>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace fl::apps {
 
@@ -37,6 +42,15 @@ struct GenerateArgs {
   double height_noise_mm = 0.5;
 };
 
+struct CalibrateArgs {
+  CompareArgs model;                // dataset, out (default calibrate_<name>), config, threads
+  std::vector<std::string> params;  // ADDRESS=MIN:MAX[:log]
+  std::string design = "hammersley";
+  int points = 16;
+  int levels = 3;
+  int local_evaluations = 60;
+};
+
 CLI::App* add_compare_subcommand(CLI::App& app, CompareArgs& args);
 // The same options as compare.
 CLI::App* add_diagnose_subcommand(CLI::App& app, CompareArgs& args);
@@ -46,5 +60,8 @@ int compare_command(const CompareArgs& args);
 // 0: diagnosed (an effect proposed or not); 2: unusable dataset or config.
 int diagnose_command(const CompareArgs& args);
 int generate_command(const GenerateArgs& args);
+CLI::App* add_calibrate_subcommand(CLI::App& app, CalibrateArgs& args);
+// 0: calibrated; 2: unusable dataset, config or parameter.
+int calibrate_command(const CalibrateArgs& args);
 
 }  // namespace fl::apps

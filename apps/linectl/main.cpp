@@ -225,6 +225,8 @@ int main(int argc, char** argv) {
   CLI::App* compare = add_compare_subcommand(app, compare_args);
   CompareArgs diagnose_args;
   CLI::App* diagnose = add_diagnose_subcommand(app, diagnose_args);
+  CalibrateArgs calibrate_args;
+  CLI::App* calibrate = add_calibrate_subcommand(app, calibrate_args);
   GenerateArgs generate_args;
   CLI::App* dataset = add_dataset_subcommand(app, generate_args);
   VisionEvalArgs vision_eval_args;
@@ -250,6 +252,7 @@ int main(int argc, char** argv) {
     if (control->parsed()) return control_command(control_args);
     if (compare->parsed()) return compare_command(compare_args);
     if (diagnose->parsed()) return diagnose_command(diagnose_args);
+    if (calibrate->parsed()) return calibrate_command(calibrate_args);
     if (dataset->parsed()) return generate_command(generate_args);
     if (hmi->parsed()) return hmi_command(hmi_args);
     if (soak->parsed()) return soak_command(soak_args);

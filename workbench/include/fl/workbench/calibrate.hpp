@@ -1,0 +1,88 @@
+// Calibration of the base model against a dataset, before any effect is blamed (issue 6): the
+// parameters the thesis tuned (bond stiffnesses, friction, surface energy, restitution) fitted
+// by a design of experiments over their box, sampled as the thesis sampled its parameter
+// spaces (a full factorial grid, or a Hammersley sequence, appendix C), every point a twin run
+// of every trial on both cores, then a bounded local fit (NLopt) from the best point.
+//
+//   const auto parameters =
+//   parse_calibrated_parameters({"bond.normal_stiffness_n_per_m3=3e5:3e6:log"}); const Calibration
+//   result = calibrate(dataset, base, parameters, {}); spec = with_calibrated(base.base_spec,
+//   parameters, result.best);
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fl/twin/model_tests/fixtures.hpp"
+#include "fl/workbench/dataset.hpp"
+
+namespace fl::workbench {
+
+// One parameter of the base model and its box. The address names where it sits in the DEM
+// model: "bond.KEY" (the bond law of every bonded pair), "fillet_equipment.LAW.KEY" and
+// "fillet_fillet.LAW.KEY" (the contact law LAW between fillet types and the equipment, or
+// between fillet types), for example "fillet_equipment.coulomb.friction_coefficient".
+struct CalibratedParameter {
+  std::string address;
+  double min = 0.0;
+  double max = 0.0;
+  bool log = false;  // sampled and searched on a log scale (stiffnesses span decades)
+};
+
+// "ADDRESS=MIN:MAX" or "ADDRESS=MIN:MAX:log", as the command line takes them. Throws
+// std::invalid_argument naming the text for a malformed one, a box that is empty or not
+// finite, or a log box that is not positive.
+CalibratedParameter parse_calibrated_parameter(const std::string& text);
+
+enum class DesignKind { kFullFactorial, kHammersley };
+
+struct CalibrationOptions {
+  DesignKind design = DesignKind::kHammersley;
+  int hammersley_points = 16;
+  int factorial_levels = 3;        // per parameter: levels^parameters points
+  int max_local_evaluations = 60;  // the local fit after the design; 0: design only
+  int threads = 2;                 // design points run at once
+};
+
+// Points of a design in the unit cube [0, 1]^dimensions: a full factorial grid with `levels`
+// levels per dimension (0 and 1 included; 1 level: the middle), or the first `points` points of
+// a Hammersley set (k / n, then radical inverses in bases 2, 3, 5, ...: up to 8 dimensions).
+std::vector<std::vector<double>> full_factorial_design(std::size_t dimensions, int levels);
+std::vector<std::vector<double>> hammersley_design(std::size_t dimensions, int points);
+
+struct DesignRun {
+  std::vector<double> values;  // one per parameter, in its unit
+  double rmse = 0.0;           // of the judged channel over every trial, SI
+  std::string failure;         // non-empty: the twin could not run this point (why)
+};
+
+struct Calibration {
+  std::string channel;
+  std::vector<CalibratedParameter> parameters;
+  std::vector<double> base_values;  // the model's own values before calibration
+  double base_rmse = 0.0;
+  std::vector<DesignRun> design;  // in design order
+  std::vector<double> best;       // calibrated values, one per parameter
+  double rmse = 0.0;              // with `best`
+  double noise_si = 0.0;          // the dataset's, when given
+  int evaluations = 0;            // twin evaluations in all (every trial each)
+};
+
+// The spec with each parameter set to its value. Throws std::invalid_argument naming the
+// address when the spec has no such law or key (a parameter that is not in the model cannot
+// be calibrated; adding a law is an effect's job).
+dem::ModelSpec with_calibrated(const dem::ModelSpec& spec,
+                               const std::vector<CalibratedParameter>& parameters,
+                               const std::vector<double>& values);
+
+// Runs the design and the local fit. Throws std::invalid_argument for no parameters, a
+// dataset type the twin does not reproduce, an address not in the model, or a design of more
+// than 4096 points; a design point the twin cannot run is recorded as failed, not fatal.
+Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& base,
+                      const std::vector<CalibratedParameter>& parameters,
+                      const CalibrationOptions& options);
+
+// The calibration as JSON (the design, the best values, errors before and after).
+std::string calibration_json(const Calibration& calibration);
+
+}  // namespace fl::workbench

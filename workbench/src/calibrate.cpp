@@ -1,0 +1,364 @@
+#include "fl/workbench/calibrate.hpp"
+
+#include <nlopt.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <stdexcept>
+#include <thread>
+
+#include "fl/twin/dem/config.hpp"
+#include "residuals.hpp"
+
+namespace fl::workbench {
+namespace {
+
+constexpr std::size_t kMaxDesignPoints = 4096;
+
+double parse_number(std::string_view text, const std::string& whole) {
+  double value = 0.0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (error != std::errc() || end != text.data() + text.size() || !std::isfinite(value)) {
+    throw std::invalid_argument("calibrated parameter '" + whole + "': '" + std::string(text) +
+                                "' is not a finite number");
+  }
+  return value;
+}
+
+std::vector<std::string> split(const std::string& text, char separator) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t at = text.find(separator, start);
+    parts.push_back(text.substr(start, at - start));
+    if (at == std::string::npos) return parts;
+    start = at + 1;
+  }
+}
+
+// The laws' parameter maps an address names, in the spec; empty when none has the key.
+std::vector<dem::LawParameters*> resolve(dem::ModelSpec& spec, const std::string& address) {
+  const std::vector<std::string> part = split(address, '.');
+  std::vector<dem::LawParameters*> found;
+  if (part.size() == 2 && part[0] == "bond") {
+    for (dem::InteractionSpec& interaction : spec.interactions) {
+      if (interaction.bond_law && interaction.bond_law->parameters.contains(part[1])) {
+        found.push_back(&interaction.bond_law->parameters);
+      }
+    }
+  } else if (part.size() == 3 && (part[0] == "fillet_equipment" || part[0] == "fillet_fillet")) {
+    const bool equipment_pair = part[0] == "fillet_equipment";
+    const std::uint32_t equipment = model_tests::equipment_type(spec);
+    for (dem::InteractionSpec& interaction : spec.interactions) {
+      // Types 0 and 1 are the fillet types (model_tests::CommonParams).
+      const bool matches = equipment_pair ? model_tests::is_fillet_with(interaction, equipment)
+                                          : model_tests::is_fillet_with(interaction, 0) ||
+                                                model_tests::is_fillet_with(interaction, 1);
+      if (!matches) continue;
+      for (dem::LawSpec& law : interaction.contact_laws) {
+        if (law.name == part[1] && law.parameters.contains(part[2])) {
+          found.push_back(&law.parameters);
+        }
+      }
+    }
+  } else {
+    throw std::invalid_argument("calibrated parameter '" + address +
+                                "': not bond.KEY, fillet_equipment.LAW.KEY or "
+                                "fillet_fillet.LAW.KEY");
+  }
+  if (found.empty()) {
+    throw std::invalid_argument("calibrated parameter '" + address +
+                                "': the DEM model has no such law and key");
+  }
+  return found;
+}
+
+double from_unit(const CalibratedParameter& p, double u) {
+  return p.log ? p.min * std::pow(p.max / p.min, u) : p.min + u * (p.max - p.min);
+}
+
+double radical_inverse(unsigned base, std::size_t k) {
+  double inverse = 0.0;
+  double digit_weight = 1.0 / base;
+  while (k > 0) {
+    inverse += static_cast<double>(k % base) * digit_weight;
+    k /= base;
+    digit_weight /= base;
+  }
+  return inverse;
+}
+
+struct Evaluator {
+  const Dataset* dataset = nullptr;
+  const model_tests::CommonParams* base = nullptr;
+  const std::vector<CalibratedParameter>* parameters = nullptr;
+  std::vector<std::size_t> trials;
+
+  // RMS of the judged channel at a point of the unit cube; throws what the twin throws.
+  [[nodiscard]] double rmse(const std::vector<double>& unit_point) const {
+    std::vector<double> values;
+    for (std::size_t p = 0; p < parameters->size(); ++p) {
+      values.push_back(from_unit((*parameters)[p], unit_point[p]));
+    }
+    model_tests::CommonParams common = *base;
+    common.base_spec = with_calibrated(base->base_spec, *parameters, values);
+    const detail::Residuals r = detail::residuals(*dataset, common, trials);
+    return std::sqrt(r.rss / static_cast<double>(r.samples));
+  }
+};
+
+struct LocalFit {
+  const Evaluator* evaluator = nullptr;
+  int evaluations = 0;
+};
+
+double local_objective(unsigned n, const double* x, double* gradient, void* data) {
+  (void)gradient;  // derivative-free
+  auto& fit = *static_cast<LocalFit*>(data);
+  ++fit.evaluations;
+  try {
+    const double rmse = fit.evaluator->rmse(std::vector<double>(x, x + n));
+    return std::isfinite(rmse) ? rmse : 1e300;
+  } catch (const std::exception& error) {
+    spdlog::debug("calibrate: a point was refused: {}", error.what());
+    return 1e300;  // a point the engine refuses is a bad point, not the end of the search
+  }
+}
+
+}  // namespace
+
+CalibratedParameter parse_calibrated_parameter(const std::string& text) {
+  const std::size_t equals = text.find('=');
+  if (equals == std::string::npos || equals == 0) {
+    throw std::invalid_argument("calibrated parameter '" + text +
+                                "': expected ADDRESS=MIN:MAX or ADDRESS=MIN:MAX:log");
+  }
+  CalibratedParameter p;
+  p.address = text.substr(0, equals);
+  const std::vector<std::string> box = split(text.substr(equals + 1), ':');
+  if (box.size() < 2 || box.size() > 3 || (box.size() == 3 && box[2] != "log")) {
+    throw std::invalid_argument("calibrated parameter '" + text +
+                                "': expected MIN:MAX or MIN:MAX:log after '='");
+  }
+  p.min = parse_number(box[0], text);
+  p.max = parse_number(box[1], text);
+  p.log = box.size() == 3;
+  if (!(p.min < p.max)) {
+    throw std::invalid_argument("calibrated parameter '" + text + "': MIN must be below MAX");
+  }
+  if (p.log && p.min <= 0.0) {
+    throw std::invalid_argument("calibrated parameter '" + text + "': a log box must be positive");
+  }
+  return p;
+}
+
+std::vector<std::vector<double>> full_factorial_design(std::size_t dimensions, int levels) {
+  if (dimensions == 0 || levels < 1) {
+    throw std::invalid_argument("full factorial design: one dimension and one level or more");
+  }
+  std::size_t count = 1;
+  for (std::size_t d = 0; d < dimensions; ++d) {
+    count *= static_cast<std::size_t>(levels);
+    if (count > kMaxDesignPoints) {
+      throw std::invalid_argument("full factorial design: more than 4096 points");
+    }
+  }
+  const auto level_value = [levels](std::size_t level) {
+    return levels == 1 ? 0.5 : static_cast<double>(level) / static_cast<double>(levels - 1);
+  };
+  std::vector<std::vector<double>> points(count, std::vector<double>(dimensions));
+  for (std::size_t k = 0; k < count; ++k) {
+    std::size_t rest = k;
+    for (std::size_t d = 0; d < dimensions; ++d) {
+      points[k][d] = level_value(rest % static_cast<std::size_t>(levels));
+      rest /= static_cast<std::size_t>(levels);
+    }
+  }
+  return points;
+}
+
+std::vector<std::vector<double>> hammersley_design(std::size_t dimensions, int points) {
+  static constexpr std::array<unsigned, 7> kBases{2, 3, 5, 7, 11, 13, 17};
+  if (dimensions == 0 || dimensions > kBases.size() + 1 || points < 1 ||
+      static_cast<std::size_t>(points) > kMaxDesignPoints) {
+    throw std::invalid_argument("Hammersley design: 1 to 8 dimensions and 1 to 4096 points");
+  }
+  std::vector<std::vector<double>> design(static_cast<std::size_t>(points),
+                                          std::vector<double>(dimensions));
+  for (std::size_t k = 0; k < design.size(); ++k) {
+    design[k][0] = static_cast<double>(k) / static_cast<double>(points);
+    for (std::size_t d = 1; d < dimensions; ++d) design[k][d] = radical_inverse(kBases[d - 1], k);
+  }
+  return design;
+}
+
+dem::ModelSpec with_calibrated(const dem::ModelSpec& spec,
+                               const std::vector<CalibratedParameter>& parameters,
+                               const std::vector<double>& values) {
+  if (values.size() != parameters.size()) {
+    throw std::invalid_argument("with_calibrated: one value per parameter is needed");
+  }
+  dem::ModelSpec calibrated = spec;
+  for (std::size_t p = 0; p < parameters.size(); ++p) {
+    const std::string key = split(parameters[p].address, '.').back();
+    for (dem::LawParameters* law : resolve(calibrated, parameters[p].address)) {
+      (*law)[key] = values[p];
+    }
+  }
+  return calibrated;
+}
+
+Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& base,
+                      const std::vector<CalibratedParameter>& parameters,
+                      const CalibrationOptions& options) {
+  if (parameters.empty()) throw std::invalid_argument("calibrate: no parameter to calibrate");
+  Calibration result;
+  result.channel = std::string(detail::judged_channel(dataset.experiment));
+  result.parameters = parameters;
+  const auto noise = dataset.noise_si.find(result.channel);
+  result.noise_si = noise == dataset.noise_si.end() ? 0.0 : noise->second;
+  model_tests::CommonParams model = base;
+  if (model.base_spec.materials.empty()) model.base_spec = dem::appendix_b_model_spec();
+  for (const CalibratedParameter& p : parameters) {
+    dem::ModelSpec probe = model.base_spec;  // resolve() throws for an address not in it
+    result.base_values.push_back(
+        resolve(probe, p.address).front()->at(split(p.address, '.').back()));
+  }
+  const std::vector<std::vector<double>> unit_points =
+      options.design == DesignKind::kFullFactorial
+          ? full_factorial_design(parameters.size(), options.factorial_levels)
+          : hammersley_design(parameters.size(), options.hammersley_points);
+
+  Evaluator evaluator{&dataset, &model, &parameters, {}};
+  for (std::size_t k = 0; k < dataset.trials.size(); ++k) evaluator.trials.push_back(k);
+  {
+    const detail::Residuals r = detail::residuals(dataset, model, evaluator.trials);
+    result.base_rmse = std::sqrt(r.rss / static_cast<double>(r.samples));
+  }
+  spdlog::info("calibrate: base model RMS {:.4g} (SI); {} design points of {} parameters",
+               result.base_rmse, unit_points.size(), parameters.size());
+
+  // The design in parallel: each point runs its own twins, nothing shared but the inputs.
+  result.design.resize(unit_points.size());
+  std::mutex next_mutex;
+  std::size_t next = 0, done = 0;
+  const auto worker = [&] {
+    for (;;) {
+      std::size_t index = 0;
+      {
+        const std::lock_guard<std::mutex> lock(next_mutex);
+        if (next == unit_points.size()) return;
+        index = next++;
+      }
+      DesignRun& run = result.design[index];
+      for (std::size_t p = 0; p < parameters.size(); ++p) {
+        run.values.push_back(from_unit(parameters[p], unit_points[index][p]));
+      }
+      try {
+        run.rmse = evaluator.rmse(unit_points[index]);
+        if (!std::isfinite(run.rmse)) run.failure = "the twin's answer is not finite";
+      } catch (const std::exception& error) {
+        run.failure = error.what();
+      }
+      const std::lock_guard<std::mutex> lock(next_mutex);
+      ++done;
+      if (done % 8 == 0 || done == unit_points.size()) {
+        spdlog::info("calibrate: design point {} of {}", done, unit_points.size());
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  const int thread_count = std::clamp(
+      options.threads, 1, static_cast<int>(std::min<std::size_t>(unit_points.size(), 64)));
+  for (int t = 0; t < thread_count; ++t) threads.emplace_back(worker);
+  for (std::thread& thread : threads) thread.join();
+  result.evaluations = static_cast<int>(unit_points.size()) + 1;
+
+  std::optional<std::size_t> best;
+  for (std::size_t k = 0; k < result.design.size(); ++k) {
+    if (!result.design[k].failure.empty()) continue;
+    if (!best || result.design[k].rmse < result.design[*best].rmse) best = k;
+  }
+  if (!best) {
+    throw std::runtime_error("calibrate: the twin ran no design point; the first failed with: " +
+                             result.design.front().failure);
+  }
+  std::vector<double> x = unit_points[*best];
+  double best_rmse = result.design[*best].rmse;
+
+  if (options.max_local_evaluations > 0) {
+    const auto dimensions = static_cast<unsigned>(parameters.size());
+    LocalFit fit{&evaluator, 0};
+    const std::vector<double> lower(dimensions, 0.0), upper(dimensions, 1.0);
+    // BOBYQA needs two or more dimensions; one parameter goes to a bounded Nelder-Mead.
+    nlopt_opt optimiser =
+        nlopt_create(dimensions >= 2 ? NLOPT_LN_BOBYQA : NLOPT_LN_NELDERMEAD, dimensions);
+    nlopt_set_lower_bounds(optimiser, lower.data());
+    nlopt_set_upper_bounds(optimiser, upper.data());
+    nlopt_set_min_objective(optimiser, local_objective, &fit);
+    nlopt_set_maxeval(optimiser, options.max_local_evaluations);
+    nlopt_set_xtol_rel(optimiser, 1e-3);
+    // A step of a design cell's half: the design has located the basin, not the minimum.
+    const double cell = 1.0 / std::pow(static_cast<double>(unit_points.size()),
+                                       1.0 / static_cast<double>(dimensions));
+    const std::vector<double> step(dimensions, std::clamp(0.5 * cell, 0.01, 0.25));
+    nlopt_set_initial_step(optimiser, step.data());
+    double refined = best_rmse;
+    std::vector<double> start = x;
+    const nlopt_result status = nlopt_optimize(optimiser, start.data(), &refined);
+    nlopt_destroy(optimiser);
+    if (status < 0) {
+      spdlog::warn("calibrate: the local fit stopped with status {}", static_cast<int>(status));
+    }
+    result.evaluations += fit.evaluations;
+    if (refined < best_rmse) {
+      best_rmse = refined;
+      x = start;
+    }
+  }
+  for (std::size_t p = 0; p < parameters.size(); ++p) {
+    result.best.push_back(from_unit(parameters[p], x[p]));
+  }
+  result.rmse = best_rmse;
+  spdlog::info("calibrate: RMS {:.4g} -> {:.4g} (SI) in {} twin evaluations", result.base_rmse,
+               result.rmse, result.evaluations);
+  return result;
+}
+
+std::string calibration_json(const Calibration& calibration) {
+  nlohmann::json out;
+  out["channel"] = calibration.channel;
+  out["base_rmse_si"] = calibration.base_rmse;
+  out["rmse_si"] = calibration.rmse;
+  out["noise_si"] = calibration.noise_si;
+  out["evaluations"] = calibration.evaluations;
+  for (std::size_t p = 0; p < calibration.parameters.size(); ++p) {
+    const CalibratedParameter& parameter = calibration.parameters[p];
+    out["parameters"].push_back({{"address", parameter.address},
+                                 {"min", parameter.min},
+                                 {"max", parameter.max},
+                                 {"log", parameter.log},
+                                 {"base", calibration.base_values[p]},
+                                 {"calibrated", calibration.best[p]}});
+  }
+  out["design"] = nlohmann::json::array();
+  for (const DesignRun& run : calibration.design) {
+    nlohmann::json point{{"values", run.values}};
+    if (run.failure.empty()) {
+      point["rmse_si"] = run.rmse;
+    } else {
+      point["failure"] = run.failure;
+    }
+    out["design"].push_back(point);
+  }
+  return out.dump(1);
+}
+
+}  // namespace fl::workbench

@@ -1,0 +1,141 @@
+// Calibration of the base model: parameter boxes parsed and malformed ones refused, the two
+// designs of experiments, addresses resolved in the DEM model, and the bond stiffness of a
+// compression dataset recovered from a twin whose stiffness is off by a factor of 1.8.
+#include "fl/workbench/calibrate.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <set>
+
+#include "fl/twin/dem/config.hpp"
+#include "workbench_test_support.hpp"
+
+namespace fl::workbench {
+namespace {
+
+TEST(Calibrate, ParsesParameterBoxes) {
+  const CalibratedParameter stiffness =
+      parse_calibrated_parameter("bond.normal_stiffness_n_per_m3=3e5:3e6:log");
+  EXPECT_EQ(stiffness.address, "bond.normal_stiffness_n_per_m3");
+  EXPECT_DOUBLE_EQ(stiffness.min, 3e5);
+  EXPECT_DOUBLE_EQ(stiffness.max, 3e6);
+  EXPECT_TRUE(stiffness.log);
+  const CalibratedParameter friction =
+      parse_calibrated_parameter("fillet_equipment.coulomb.friction_coefficient=0.2:0.9");
+  EXPECT_FALSE(friction.log);
+  EXPECT_DOUBLE_EQ(friction.max, 0.9);
+}
+
+TEST(Calibrate, RefusesMalformedParameterBoxesNamingThem) {
+  for (const std::string text :
+       {"bond.x", "=1:2", "bond.x=1", "bond.x=1:2:3:4", "bond.x=2:1", "bond.x=1:1",
+        "bond.x=0:1:log", "bond.x=1:nan", "bond.x=1:2:lin", "bond.x=1e999:2", "bond.x=1:2 "}) {
+    SCOPED_TRACE(text);
+    try {
+      (void)parse_calibrated_parameter(text);
+      ADD_FAILURE() << "accepted";
+    } catch (const std::invalid_argument& error) {
+      EXPECT_NE(std::string(error.what()).find(text), std::string::npos) << error.what();
+    }
+  }
+}
+
+TEST(Calibrate, FullFactorialDesignHoldsEveryLevelCombination) {
+  const auto design = full_factorial_design(2, 3);
+  ASSERT_EQ(design.size(), 9U);
+  std::set<std::vector<double>> distinct(design.begin(), design.end());
+  EXPECT_EQ(distinct.size(), 9U);
+  EXPECT_TRUE(distinct.contains(std::vector<double>{0.0, 0.0}));
+  EXPECT_TRUE(distinct.contains(std::vector<double>{0.5, 0.5}));
+  EXPECT_TRUE(distinct.contains(std::vector<double>{1.0, 1.0}));
+  EXPECT_EQ(full_factorial_design(3, 1), (std::vector<std::vector<double>>{{0.5, 0.5, 0.5}}));
+  EXPECT_THROW((void)full_factorial_design(13, 2), std::invalid_argument);  // 8192 points
+  EXPECT_THROW((void)full_factorial_design(0, 3), std::invalid_argument);
+}
+
+TEST(Calibrate, HammersleyPointsStratifyTheSquare) {
+  // 16 points in base 2 form a (0,4,2)-net: every 4 x 4 cell, and every 2 x 8 and 8 x 2
+  // one, holds exactly one point; a random sample of 16 would leave cells empty.
+  const auto design = hammersley_design(2, 16);
+  ASSERT_EQ(design.size(), 16U);
+  for (const auto& [columns, rows] : {std::pair{4, 4}, std::pair{2, 8}, std::pair{8, 2}}) {
+    std::set<std::pair<int, int>> cells;
+    for (const auto& point : design) {
+      cells.insert({static_cast<int>(point[0] * columns), static_cast<int>(point[1] * rows)});
+    }
+    EXPECT_EQ(cells.size(), 16U) << columns << " x " << rows;
+  }
+  // The third coordinate is the radical inverse in base 3: point 5 = 12 in base 3 -> 0.21 in
+  // base 3 = 2/3 + 1/9.
+  EXPECT_DOUBLE_EQ(hammersley_design(3, 8)[5][2], 2.0 / 3.0 + 1.0 / 9.0);
+  EXPECT_THROW((void)hammersley_design(9, 8), std::invalid_argument);
+}
+
+TEST(Calibrate, AddressesSetEveryLawTheyNameAndNothingElse) {
+  const dem::ModelSpec base = dem::appendix_b_model_spec();
+  const std::vector<CalibratedParameter> parameters{
+      parse_calibrated_parameter("fillet_equipment.coulomb.friction_coefficient=0.1:1"),
+      parse_calibrated_parameter("bond.normal_stiffness_n_per_m3=1e5:1e7:log")};
+  const dem::ModelSpec spec = with_calibrated(base, parameters, {0.7, 2e6});
+  const std::uint32_t equipment = model_tests::equipment_type(spec);
+  int equipment_pairs = 0, bonded_pairs = 0;
+  for (const dem::InteractionSpec& interaction : spec.interactions) {
+    for (const dem::LawSpec& law : interaction.contact_laws) {
+      if (law.name != "coulomb") continue;
+      const bool with_equipment = model_tests::is_fillet_with(interaction, equipment);
+      equipment_pairs += with_equipment ? 1 : 0;
+      // Appendix B: fillet-equipment 0.5 becomes 0.7; the fillet-fillet 0.1 stays.
+      EXPECT_DOUBLE_EQ(law.parameters.at("friction_coefficient"), with_equipment ? 0.7 : 0.1);
+    }
+    if (interaction.bond_law) {
+      ++bonded_pairs;
+      EXPECT_DOUBLE_EQ(interaction.bond_law->parameters.at("normal_stiffness_n_per_m3"), 2e6);
+    }
+  }
+  EXPECT_EQ(equipment_pairs, 2);  // fillet_a and fillet_b with the equipment
+  EXPECT_GE(bonded_pairs, 1);
+  for (const std::string address : {"bond.no_such_key", "fillet_equipment.no_law.friction",
+                                    "fillet_equipment.coulomb", "belt.coulomb.friction"}) {
+    try {
+      (void)with_calibrated(base, {{address, 0.1, 1.0, false}}, {0.5});
+      ADD_FAILURE() << address << " was accepted";
+    } catch (const std::invalid_argument& error) {
+      EXPECT_NE(std::string(error.what()).find(address), std::string::npos) << error.what();
+    }
+  }
+}
+
+TEST(Calibrate, RecoversTheBondStiffnessOfACompressionDataset) {
+  // Measured on a block whose bonds are 1.8 times appendix B's; the twin starts from appendix
+  // B. The plate force is proportional to the normal stiffness, so the fit must find it to the
+  // noise: 0.01 N on forces of about 1 N over ~170 rows is a 0.1 % stiffness resolution; 2 %
+  // leaves the local fit's tolerance room.
+  constexpr double kTruthStiffness = 1.8e6;
+  GeneratorOptions options;
+  options.effect = "none";
+  options.force_noise_n = test::kNoiseN;
+  options.common = test::base_model();
+  options.common.base_spec =
+      with_calibrated(options.common.base_spec,
+                      {{"bond.normal_stiffness_n_per_m3", 1.0, 2.0, false}}, {kTruthStiffness});
+  const Dataset data = generate_dataset(options).dataset;
+  CalibrationOptions calibration;
+  calibration.hammersley_points = 8;
+  const Calibration result = calibrate(
+      data, test::base_model(),
+      {parse_calibrated_parameter("bond.normal_stiffness_n_per_m3=3e5:1e7:log")}, calibration);
+  ASSERT_EQ(result.design.size(), 8U);
+  EXPECT_DOUBLE_EQ(result.base_values.front(), 1e6);
+  EXPECT_NEAR(result.best.front(), kTruthStiffness, 0.02 * kTruthStiffness);
+  EXPECT_GT(result.base_rmse, 5.0 * test::kNoiseN);  // the base model fails it
+  EXPECT_LT(result.rmse, 1.2 * test::kNoiseN);       // the calibrated one sits at the noise
+  // The best design point is no better than the fit.
+  const auto best_design =
+      std::min_element(result.design.begin(), result.design.end(),
+                       [](const DesignRun& a, const DesignRun& b) { return a.rmse < b.rmse; });
+  EXPECT_LE(result.rmse, best_design->rmse);
+}
+
+}  // namespace
+}  // namespace fl::workbench
