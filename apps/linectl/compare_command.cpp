@@ -55,9 +55,11 @@ std::optional<WorkbenchInputs> load_inputs(const CompareArgs& args) {
   inputs.common.thread_count = args.threads;
   if (inputs.dataset.experiment != ExperimentType::kCompress &&
       inputs.dataset.experiment != ExperimentType::kSlide &&
-      inputs.dataset.experiment != ExperimentType::kDrop) {
-    spdlog::error("{}: the twin does not reproduce {} datasets yet (compress, slide, drop)",
-                  args.dataset, to_string(inputs.dataset.experiment));
+      inputs.dataset.experiment != ExperimentType::kDrop &&
+      inputs.dataset.experiment != ExperimentType::kLineTracks) {
+    spdlog::error(
+        "{}: the twin does not reproduce {} datasets yet (compress, slide, drop, line_tracks)",
+        args.dataset, to_string(inputs.dataset.experiment));
     return std::nullopt;
   }
   return inputs;
@@ -92,10 +94,11 @@ CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args) {
   CLI::App* dataset = app.add_subcommand("dataset", "measurement dataset tools");
   dataset->require_subcommand(1);
   CLI::App* generate = dataset->add_subcommand(
-      "generate", "write a synthetic compress, slide or drop dataset with a hidden effect");
+      "generate",
+      "write a synthetic compress, slide, drop or line_tracks dataset with a hidden effect");
   generate->add_option("--out", args.out, "dataset folder to write")->required();
-  generate->add_option("--experiment", args.experiment, "compress, slide or drop")
-      ->check(CLI::IsMember({"compress", "slide", "drop"}));
+  generate->add_option("--experiment", args.experiment, "compress, slide, drop or line_tracks")
+      ->check(CLI::IsMember({"compress", "slide", "drop", "line_tracks"}));
   generate->add_option("--effect", args.effect, "random, none, or an effect law");
   generate->add_option("--seed", args.seed, "random seed (effect, parameters, noise)");
   generate->add_option("--force-noise-n", args.force_noise_n, "1-sigma force noise in N")
@@ -104,6 +107,12 @@ CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args) {
       ->check(CLI::Range(0.0, 10.0));
   generate->add_option("--height-noise-mm", args.height_noise_mm, "drop: 1-sigma height noise")
       ->check(CLI::Range(0.0, 10.0));
+  generate
+      ->add_option("--position-noise-mm", args.position_noise_mm,
+                   "line_tracks: 1-sigma camera position noise")
+      ->check(CLI::Range(0.0, 50.0));
+  generate->add_option("--fillets", args.fillets_per_trial, "line_tracks: fillets per trial")
+      ->check(CLI::Range(1, 100));
   return dataset;
 }
 
@@ -115,6 +124,8 @@ int generate_command(const GenerateArgs& args) {
   options.force_noise_n = args.force_noise_n;
   options.angle_noise_deg = args.angle_noise_deg;
   options.height_noise_mm = args.height_noise_mm;
+  options.position_noise_mm = args.position_noise_mm;
+  options.fillets_per_trial = args.fillets_per_trial;
   options.common.base_spec = dem::load_model_spec(default_config("dem.yaml"));
   const GeneratedDataset made = generate_dataset(options);
   write_dataset(made.dataset, args.out);

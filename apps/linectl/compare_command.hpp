@@ -10,7 +10,7 @@
 //     fits base parameters of the model (bond stiffness, friction, surface energy) by a design
 //     of experiments and a local fit (DIR/calibration.json, DIR/design.csv), with the
 //     config/dem.yaml change.
-//   linectl dataset generate --out DIR [--experiment compress|slide|drop]
+//   linectl dataset generate --out DIR [--experiment compress|slide|drop|line_tracks]
 //                            [--effect random|none|LAW] [--seed N]
 //     a synthetic dataset with a hidden effect; the truth in DIR.truth.yaml.
 // compare, diagnose and calibrate take compress, slide and drop datasets (the twin and the
@@ -40,6 +40,8 @@ struct GenerateArgs {
   double force_noise_n = 0.01;
   double angle_noise_deg = 0.3;
   double height_noise_mm = 0.5;
+  double position_noise_mm = 1.0;
+  int fillets_per_trial = 5;
 };
 
 struct CalibrateArgs {

@@ -8,11 +8,9 @@
 #include <charconv>
 #include <cmath>
 #include <limits>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <stdexcept>
-#include <thread>
 
 #include "fl/twin/dem/config.hpp"
 #include "residuals.hpp"
@@ -247,38 +245,25 @@ Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& b
 
   // The design in parallel: each point runs its own twins, nothing shared but the inputs.
   result.design.resize(unit_points.size());
-  std::mutex next_mutex;
-  std::size_t next = 0, done = 0;
-  const auto worker = [&] {
-    for (;;) {
-      std::size_t index = 0;
-      {
-        const std::lock_guard<std::mutex> lock(next_mutex);
-        if (next == unit_points.size()) return;
-        index = next++;
-      }
-      DesignRun& run = result.design[index];
-      for (std::size_t p = 0; p < parameters.size(); ++p) {
-        run.values.push_back(from_unit(parameters[p], unit_points[index][p]));
-      }
-      try {
-        run.rmse = evaluator.rmse(unit_points[index]);
-        if (!std::isfinite(run.rmse)) run.failure = "the twin's answer is not finite";
-      } catch (const std::exception& error) {
-        run.failure = error.what();
-      }
-      const std::lock_guard<std::mutex> lock(next_mutex);
-      ++done;
-      if (done % 8 == 0 || done == unit_points.size()) {
-        spdlog::info("calibrate: design point {} of {}", done, unit_points.size());
-      }
-    }
-  };
-  std::vector<std::thread> threads;
-  const int thread_count = std::clamp(
-      options.threads, 1, static_cast<int>(std::min<std::size_t>(unit_points.size(), 64)));
-  for (int t = 0; t < thread_count; ++t) threads.emplace_back(worker);
-  for (std::thread& thread : threads) thread.join();
+  model_tests::parallel_for(
+      unit_points.size(), std::max(1, options.threads),
+      [&](std::size_t index) {
+        DesignRun& run = result.design[index];
+        for (std::size_t p = 0; p < parameters.size(); ++p) {
+          run.values.push_back(from_unit(parameters[p], unit_points[index][p]));
+        }
+        try {
+          run.rmse = evaluator.rmse(unit_points[index]);
+          if (!std::isfinite(run.rmse)) run.failure = "the twin's answer is not finite";
+        } catch (const std::exception& error) {
+          run.failure = error.what();
+        }
+      },
+      [](std::size_t done, std::size_t total) {
+        if (done % 8 == 0 || done == total) {
+          spdlog::info("calibrate: design point {} of {}", done, total);
+        }
+      });
   result.evaluations = static_cast<int>(unit_points.size()) + 1;
 
   std::optional<std::size_t> best;

@@ -160,7 +160,10 @@ std::vector<EffectCandidate> slide_candidates() {
 }
 
 std::vector<EffectCandidate> candidates_for(ExperimentType type) {
-  if (type == ExperimentType::kSlide) return slide_candidates();
+  // A belt's takt loads the fillet-belt contact as a tilted plate does: the slide's candidates.
+  if (type == ExperimentType::kSlide || type == ExperimentType::kLineTracks) {
+    return slide_candidates();
+  }
   // A drop loads the same bonds as a compression, at impact rates: the same bond laws.
   if (type == ExperimentType::kCompress || type == ExperimentType::kDrop) {
     return compress_candidates();

@@ -1,6 +1,7 @@
 #include "fl/workbench/generator.hpp"
 
 #include <algorithm>
+#include <array>
 #include <fstream>
 #include <memory>
 #include <numbers>
@@ -76,7 +77,13 @@ const std::vector<EffectRange>& drop_effects() {
 }
 
 const std::vector<EffectRange>& effects_of(ExperimentType type) {
-  if (type == ExperimentType::kSlide) return slide_effects();
+  // A belt's takt acceleration loads the same fillet-belt contact as a tilted plate: the slide's
+  // contact effects and ranges. The sliding 0.5 lets a fillet slip at a 7 m/s^2 takt (mu g =
+  // 4.9 m/s^2), some 30 mm behind the belt by the time it holds again; a resting 0.7 to 0.9
+  // holds it all but fully. A wet film lets it slip at 4 m/s^2 too.
+  if (type == ExperimentType::kSlide || type == ExperimentType::kLineTracks) {
+    return slide_effects();
+  }
   if (type == ExperimentType::kDrop) return drop_effects();
   return compress_effects();
 }
@@ -121,6 +128,52 @@ Trial drop_trial(int k) {
   trial.data.lines.resize(t.size());
   trial.conditions["drop_height"] = drop_height_m;
   trial.conditions["variant"] = std::string("172x72x32");
+  return trial;
+}
+
+// Trial k of a line-track dataset: fillets on a belt that starts, runs at 1.5 m/s and stops at a
+// takt acceleration of 4 m/s^2 (trials 0, 1) or 7 m/s^2 (2, 3), each dry then wet,
+// tracked at 50 frames/s for 1.2 s. The fillets lie 0.3 m apart along the belt, at random
+// lateral offsets and headings; the first row of each is its true pose (filled in here), the
+// others are what the twin answers.
+Trial line_tracks_trial(int k, int fillets, std::mt19937_64& random) {
+  constexpr double kSpeedMps = 1.5;
+  constexpr double kStartS = 0.1, kStopS = 0.7, kEndS = 1.2, kFrameS = 0.02;
+  const double acceleration = (k / 2) % 2 == 0 ? 4.0 : 7.0;
+  const std::string surface = k % 2 == 0 ? "dry" : "wet";
+  Trial trial;
+  trial.id = "takt" + std::to_string(k + 1) + "_" + surface;
+  trial.conditions["surface"] = surface;
+  trial.conditions["variant"] = std::string("172x72x32");
+  const double ramp_s = kSpeedMps / acceleration;
+  Table commands;
+  commands.channels = {
+      {"time", *find_unit("s"), {0.0, kStartS, kStartS + ramp_s, kStopS, kStopS + ramp_s, kEndS}},
+      {"belt_speed", *find_unit("m/s"), {0.0, 0.0, kSpeedMps, kSpeedMps, 0.0, 0.0}}};
+  commands.lines.resize(6);
+  trial.commands = commands;
+  std::uniform_real_distribution<double> lateral(-0.05, 0.05);
+  std::uniform_real_distribution<double> heading(-std::numbers::pi, std::numbers::pi);
+  std::vector<std::array<double, 3>> first(static_cast<std::size_t>(fillets));
+  for (std::size_t f = 0; f < first.size(); ++f) {
+    first[f] = {0.3 * static_cast<double>(f), lateral(random), heading(random)};
+  }
+  std::vector<double> t, id, x, y, angle;
+  for (int frame = 0; frame * kFrameS <= kEndS + 1e-9; ++frame) {
+    for (std::size_t f = 0; f < first.size(); ++f) {
+      t.push_back(frame * kFrameS);
+      id.push_back(static_cast<double>(f + 1));
+      x.push_back(frame == 0 ? first[f][0] : 0.0);
+      y.push_back(frame == 0 ? first[f][1] : 0.0);
+      angle.push_back(frame == 0 ? first[f][2] : 0.0);
+    }
+  }
+  trial.data.channels = {{"time", *find_unit("s"), t},
+                         {"fillet", *find_unit("1"), id},
+                         {"x", *find_unit("mm"), x},
+                         {"y", *find_unit("mm"), y},
+                         {"angle", *find_unit("deg"), angle}};
+  trial.data.lines.resize(t.size());
   return trial;
 }
 
@@ -222,27 +275,33 @@ dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& 
 
 dem::ModelSpec with_experiment_effect(const dem::ModelSpec& base, ExperimentType experiment,
                                       const HiddenEffect& effect) {
-  return experiment == ExperimentType::kSlide ? with_contact_effect(base, effect)
-                                              : with_bond_effect(base, effect);
+  const bool contact =
+      experiment == ExperimentType::kSlide || experiment == ExperimentType::kLineTracks;
+  return contact ? with_contact_effect(base, effect) : with_bond_effect(base, effect);
 }
 
 GeneratedDataset generate_dataset(const GeneratorOptions& options) {
   const ExperimentType experiment = options.experiment;
   if (experiment != ExperimentType::kCompress && experiment != ExperimentType::kSlide &&
-      experiment != ExperimentType::kDrop) {
-    throw std::invalid_argument("the generator makes compress, slide and drop datasets, not " +
-                                std::string(to_string(experiment)));
+      experiment != ExperimentType::kDrop && experiment != ExperimentType::kLineTracks) {
+    throw std::invalid_argument(
+        "the generator makes compress, slide, drop and line_tracks datasets, not " +
+        std::string(to_string(experiment)));
   }
   const bool slide = experiment == ExperimentType::kSlide;
   const bool drop = experiment == ExperimentType::kDrop;
+  const bool tracks = experiment == ExperimentType::kLineTracks;
   double noise_si = options.force_noise_n;
+  if (tracks) noise_si = options.position_noise_mm * 1e-3;
   if (slide) noise_si = options.angle_noise_deg * std::numbers::pi / 180.0;
   if (drop) noise_si = options.height_noise_mm * 1e-3;
-  if (options.trials < 0 || options.repetitions < 1 || !(noise_si >= 0.0)) {
+  const double track_angle_noise_si = options.track_angle_noise_deg * std::numbers::pi / 180.0;
+  if (options.trials < 0 || options.repetitions < 1 || options.fillets_per_trial < 1 ||
+      !(noise_si >= 0.0) || !(track_angle_noise_si >= 0.0)) {
     throw std::invalid_argument(
-        "generator: trials must be >= 0, repetitions >= 1 and the noise >= 0");
+        "generator: trials must be >= 0, repetitions and fillets >= 1 and the noise >= 0");
   }
-  const int trials = options.trials > 0 ? options.trials : (slide ? 4 : 3);
+  const int trials = options.trials > 0 ? options.trials : (slide || tracks ? 4 : 3);
   std::mt19937_64 random(options.seed);
   GeneratedDataset made;
   const std::vector<EffectRange>& effects = effects_of(options.experiment);
@@ -279,8 +338,15 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
               std::to_string(options.seed);
   data.description = "made by the workbench generator; the truth is in a separate file";
   data.experiment = options.experiment;
-  const std::string channel = slide ? "onset_angle" : (drop ? "height" : "force");
+  std::string channel = "force";
+  if (slide) channel = "onset_angle";
+  if (drop) channel = "height";
+  if (tracks) channel = "x";
   data.noise_si[channel] = noise_si;
+  if (tracks) {
+    data.noise_si["y"] = noise_si;
+    data.noise_si["angle"] = track_angle_noise_si;
+  }
   std::normal_distribution<double> noise(0.0, noise_si);
   for (int k = 0; k < trials; ++k) {
     // Compress: ramps of 0.2, 0.1, 0.05 s, ...: the rate dependence shows.
@@ -289,8 +355,39 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
       trial = slide_trial(k, options.repetitions);
     } else if (drop) {
       trial = drop_trial(k);
+    } else if (tracks) {
+      trial = line_tracks_trial(k, options.fillets_per_trial, random);
     } else {
       trial = compress_trial("rate" + std::to_string(k + 1), 0.2 / std::pow(2.0, k));
+    }
+    if (tracks) {
+      // A fillet's first row is where the camera first saw it, noise and all: the truth starts
+      // there (as any twin must), its later rows are the truth's answer plus noise.
+      const std::vector<double>& time = trial.data.at("time").values_si;
+      std::normal_distribution<double> angle_noise(0.0, track_angle_noise_si);
+      const auto first_row = [&time](std::size_t row) { return time[row] == time.front(); };
+      const std::array<std::pair<std::size_t, std::normal_distribution<double>*>, 3> noisy{
+          {{2, &noise}, {3, &noise}, {4, &angle_noise}}};  // x, y, angle
+      for (const auto& [column, distribution] : noisy) {
+        std::vector<double>& values = trial.data.channels[column].values_si;
+        for (std::size_t row = 0; row < values.size(); ++row) {
+          if (first_row(row) && distribution->stddev() > 0.0)
+            values[row] += (*distribution)(random);
+        }
+      }
+      const Table response = truth->run(data, trial);
+      for (const auto& [column, distribution] : noisy) {
+        std::vector<double>& values = trial.data.channels[column].values_si;
+        const std::vector<double>& modelled =
+            response.at(trial.data.channels[column].name).values_si;
+        for (std::size_t row = 0; row < values.size(); ++row) {
+          if (first_row(row)) continue;
+          values[row] = modelled[row];
+          if (distribution->stddev() > 0.0) values[row] += (*distribution)(random);
+        }
+      }
+      data.trials.push_back(std::move(trial));
+      continue;
     }
     const Table response = truth->run(data, trial);
     std::vector<double>& measured = trial.data.channels.back().values_si;
@@ -302,6 +399,24 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
   }
   return made;
 }
+
+namespace {
+
+// Values in each channel's file unit, as a lab would write them.
+void write_table(const Table& data, const std::filesystem::path& file) {
+  std::vector<std::string> header;
+  std::vector<std::vector<double>> columns;
+  for (const Channel& channel : data.channels) {
+    header.push_back(channel.name + " [" + std::string(channel.unit.symbol) + "]");
+    std::vector<double>& column = columns.emplace_back();
+    for (const double value : channel.values_si) column.push_back(value / channel.unit.to_si);
+  }
+  report::CsvTable table(std::move(header));
+  table.add_columns(columns);
+  table.write(file);
+}
+
+}  // namespace
 
 void write_dataset(const Dataset& dataset, const std::filesystem::path& folder) {
   std::filesystem::create_directories(folder);
@@ -338,17 +453,12 @@ void write_dataset(const Dataset& dataset, const std::filesystem::path& folder) 
       }
       manifest << "\n";
     }
-    // Values in each channel's file unit, as a lab would write them.
-    std::vector<std::string> header;
-    std::vector<std::vector<double>> columns;
-    for (const Channel& channel : trial.data.channels) {
-      header.push_back(channel.name + " [" + std::string(channel.unit.symbol) + "]");
-      std::vector<double>& column = columns.emplace_back();
-      for (const double value : channel.values_si) column.push_back(value / channel.unit.to_si);
+    write_table(trial.data, folder / file);
+    if (trial.commands) {
+      const std::string commands_file = trial.id + "_commands.csv";
+      manifest << "    commands: " << commands_file << "\n";
+      write_table(*trial.commands, folder / commands_file);
     }
-    report::CsvTable table(std::move(header));
-    table.add_columns(columns);
-    table.write(folder / file);
   }
   if (!manifest) throw std::runtime_error("cannot write " + (folder / "manifest.yaml").string());
 }

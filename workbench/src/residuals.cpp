@@ -16,9 +16,11 @@ std::string_view judged_channel(ExperimentType type) {
       return "onset_angle";
     case ExperimentType::kDrop:
       return "height";
+    case ExperimentType::kLineTracks:
+      return "x";  // along the belt: where a slip shows
     default:
       throw std::invalid_argument(
-          "the workbench fits the twin to compress, slide and drop datasets, not " +
+          "the workbench fits the twin to compress, slide, drop and line_tracks datasets, not " +
           std::string(to_string(type)));
   }
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -74,6 +75,18 @@ void keep_wet_film_for_wet_trials(dem::ModelSpec& spec, const Conditions& condit
   }
 }
 
+// The fillet-equipment contact laws with their parameters, for describe().
+std::string equipment_chain_text(const dem::ModelSpec& spec) {
+  std::string text;
+  const std::uint32_t equipment = model_tests::equipment_type(spec);
+  for (const dem::InteractionSpec& interaction : spec.interactions) {
+    if (!model_tests::is_fillet_with(interaction, equipment)) continue;
+    for (const dem::LawSpec& law : interaction.contact_laws) text += " " + law_text(law);
+    break;  // fillet types A and B share the chain
+  }
+  return text;
+}
+
 // The bond law of the spec with its parameters, for describe().
 std::string bond_law_text(const dem::ModelSpec& spec) {
   for (const dem::InteractionSpec& interaction : spec.interactions) {
@@ -131,12 +144,7 @@ std::string TwinSlideModel::describe() const {
   std::ostringstream text;
   text << "DEM twin, slide of a flexible fillet of " << common_.sub_particle_radius_m * 1e3
        << " mm sub-particles; fillet-equipment laws:";
-  const std::uint32_t equipment = model_tests::equipment_type(common_.base_spec);
-  for (const dem::InteractionSpec& interaction : common_.base_spec.interactions) {
-    if (!model_tests::is_fillet_with(interaction, equipment)) continue;
-    for (const dem::LawSpec& law : interaction.contact_laws) text << " " << law_text(law);
-    break;  // fillet types A and B share the chain
-  }
+  text << equipment_chain_text(common_.base_spec);
   return text.str();
 }
 
@@ -240,6 +248,85 @@ Table TwinDropModel::run(const Dataset& dataset, const Trial& trial) {
   return table;
 }
 
+TwinLineTracksModel::TwinLineTracksModel(model_tests::CommonParams common)
+    : common_(std::move(common)) {
+  if (common_.base_spec.materials.empty()) common_.base_spec = dem::appendix_b_model_spec();
+}
+
+std::string TwinLineTracksModel::describe() const {
+  std::ostringstream text;
+  text << "DEM twin, flexible fillets of " << common_.sub_particle_radius_m * 1e3
+       << " mm sub-particles on a commanded belt; fillet-equipment laws:";
+  text << equipment_chain_text(common_.base_spec);
+  return text.str();
+}
+
+Table TwinLineTracksModel::run(const Dataset& dataset, const Trial& trial) {
+  if (dataset.experiment != ExperimentType::kLineTracks) {
+    throw std::runtime_error("the line-tracks model runs line_tracks datasets, not " +
+                             std::string(to_string(dataset.experiment)));
+  }
+  model_tests::BeltTracksParams params;
+  params.common = common_;
+  params.common.variant = fillet_variant(trial.conditions, common_.variant);
+  keep_wet_film_for_wet_trials(params.common.base_spec, trial.conditions);
+  if (trial.commands && trial.commands->channels.size() >= 2) {
+    params.command_time_s = trial.commands->at("time").values_si;
+    for (const Channel& channel : trial.commands->channels) {
+      if (channel.name == "time") continue;
+      params.belt_speed_m_per_s = channel.values_si;  // the first speed column drives the belt
+      break;
+    }
+  } else {
+    const auto speed = trial.conditions.find("belt_speed");
+    if (speed == trial.conditions.end()) {
+      throw std::runtime_error(
+          "the line-tracks model needs the trial's belt command log or its belt_speed condition");
+    }
+    params.command_time_s = {0.0};
+    params.belt_speed_m_per_s = {std::get<double>(speed->second)};
+  }
+  const std::vector<double>& time = trial.data.at("time").values_si;
+  const std::vector<double>& fillet = trial.data.at("fillet").values_si;
+  const std::vector<double>& x = trial.data.at("x").values_si;
+  const std::vector<double>& y = trial.data.at("y").values_si;
+  const std::vector<double>& angle = trial.data.at("angle").values_si;
+  // Rows in time order (stable: a file may list them per fillet); each fillet's first row is
+  // where it appears.
+  std::vector<std::size_t> order(trial.data.rows());
+  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::stable_sort(order.begin(), order.end(),
+                   [&time](std::size_t a, std::size_t b) { return time[a] < time[b]; });
+  std::map<long long, std::size_t> index_of_fillet;
+  for (const std::size_t row : order) {
+    const long long number = std::llround(fillet[row]);
+    auto [found, added] = index_of_fillet.try_emplace(number, params.first_poses.size());
+    if (added) params.first_poses.push_back({x[row], y[row], angle[row]});
+    params.samples.push_back({found->second, time[row]});
+  }
+  const model_tests::BeltTracksResult result = model_tests::run_belt_tracks(params);
+  if (result.poses.size() != order.size()) {
+    throw std::runtime_error("the line-tracks model became unstable after " +
+                             std::to_string(result.poses.size()) + " of " +
+                             std::to_string(order.size()) + " rows");
+  }
+  Table table;
+  table.channels = {{"x", trial.data.at("x").unit, std::vector<double>(order.size())},
+                    {"y", trial.data.at("y").unit, std::vector<double>(order.size())},
+                    {"angle", trial.data.at("angle").unit, std::vector<double>(order.size())}};
+  constexpr double kTurn = 2.0 * std::numbers::pi;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::size_t row = order[k];
+    const model_tests::BeltPose& pose = result.poses[k];
+    table.channels[0].values_si[row] = pose.x_m;
+    table.channels[1].values_si[row] = pose.y_m;
+    table.channels[2].values_si[row] =
+        pose.yaw_rad + kTurn * std::round((angle[row] - pose.yaw_rad) / kTurn);
+  }
+  table.lines = trial.data.lines;
+  return table;
+}
+
 std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
                                             const model_tests::CommonParams& common) {
   switch (experiment) {
@@ -249,6 +336,8 @@ std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
       return std::make_unique<TwinSlideModel>(common);
     case ExperimentType::kDrop:
       return std::make_unique<TwinDropModel>(common);
+    case ExperimentType::kLineTracks:
+      return std::make_unique<TwinLineTracksModel>(common);
     default:
       throw std::invalid_argument("the twin does not reproduce " +
                                   std::string(to_string(experiment)) + " datasets yet");

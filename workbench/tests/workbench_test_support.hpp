@@ -3,11 +3,15 @@
 // them.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 #include "fl/twin/dem/config.hpp"
 #include "fl/workbench/compare.hpp"
+#include "fl/workbench/diagnose.hpp"
 #include "fl/workbench/generator.hpp"
 #include "fl/workbench/twin_models.hpp"
 
@@ -86,6 +90,33 @@ inline double height_score(const Dataset& data, const HiddenEffect& effect) {
   common.base_spec = with_bond_effect(common.base_spec, effect);
   TwinDropModel model(common);
   return compare(data, model).overall("height").score;
+}
+
+// Issue 6's proof on a dataset made with a hidden effect: diagnose ranks that effect first and
+// proposes it, and adding it as fitted makes the error fall by 70 % or more and end within
+// twice the noise. `score(data, effect)`: the overall score (RMS over noise) of the channel.
+template <typename Score>
+void expect_hidden_effect_found(const GeneratedDataset& made, std::string_view channel,
+                                const Score& score) {
+  SCOPED_TRACE(made.truth.law);
+  const Dataset& data = made.dataset;
+  const Diagnosis diagnosis = diagnose(data, base_model(), candidates_for(data.experiment));
+  ASSERT_FALSE(diagnosis.ranked.empty());
+  EXPECT_EQ(diagnosis.channel, channel);
+  EXPECT_EQ(diagnosis.ranked.front().law, made.truth.law) << diagnosis.verdict;
+  EXPECT_TRUE(diagnosis.ranked.front().proposed) << diagnosis.verdict;
+  const double before = score(data, HiddenEffect{});
+  const double after = score(data, proposed_effect(diagnosis));
+  EXPECT_LE(after, 0.3 * before) << "before " << before << ", after " << after;
+  EXPECT_LE(after, 2.0) << "in noise sigmas";
+}
+
+// The other half of the proof: residuals at the noise level get no effect proposed.
+inline void expect_nothing_proposed(const Dataset& data) {
+  const Diagnosis diagnosis = diagnose(data, base_model(), candidates_for(data.experiment));
+  for (const CandidateResult& result : diagnosis.ranked) EXPECT_FALSE(result.proposed);
+  EXPECT_TRUE(proposed_effect(diagnosis).law.empty());
+  EXPECT_NE(diagnosis.verdict.find("nothing missing"), std::string::npos) << diagnosis.verdict;
 }
 
 }  // namespace fl::workbench::test

@@ -11,35 +11,20 @@
 namespace fl::workbench {
 namespace {
 
-using test::base_model;
-
-void expect_found(const std::string& effect, std::uint64_t seed) {
-  SCOPED_TRACE(effect);
-  const GeneratedDataset made = test::generate_slide(effect, seed);
-  const Dataset& data = made.dataset;
-  const Diagnosis diagnosis = diagnose(data, base_model(), candidates_for(data.experiment));
-  ASSERT_FALSE(diagnosis.ranked.empty());
-  EXPECT_EQ(diagnosis.channel, "onset_angle");
-  EXPECT_EQ(diagnosis.ranked.front().law, made.truth.law) << diagnosis.verdict;
-  EXPECT_TRUE(diagnosis.ranked.front().proposed) << diagnosis.verdict;
-  const double before = test::angle_score(data, {});
-  const double after = test::angle_score(data, proposed_effect(diagnosis));
-  EXPECT_LE(after, 0.3 * before) << "before " << before << ", after " << after;
-  EXPECT_LE(after, 2.0) << "in noise sigmas";
-}
-
 // One test per effect, so each stays a few minutes and ctest can run them apart. The seeds
 // draw parameters inside the generator's ranges; the effect is named so both are proven.
-TEST(SlideDiagnose, FindsAHiddenWetFilm) { expect_found("wet_film", 21); }
+TEST(SlideDiagnose, FindsAHiddenWetFilm) {
+  test::expect_hidden_effect_found(test::generate_slide("wet_film", 21), "onset_angle",
+                                   test::angle_score);
+}
 
-TEST(SlideDiagnose, FindsHiddenStaticFriction) { expect_found("static_kinetic_friction", 22); }
+TEST(SlideDiagnose, FindsHiddenStaticFriction) {
+  test::expect_hidden_effect_found(test::generate_slide("static_kinetic_friction", 22),
+                                   "onset_angle", test::angle_score);
+}
 
 TEST(SlideDiagnose, ProposesNothingWhenResidualsAreAtTheNoise) {
-  const Dataset data = test::generate_slide("none", 23).dataset;
-  const Diagnosis diagnosis = diagnose(data, base_model(), candidates_for(data.experiment));
-  for (const CandidateResult& result : diagnosis.ranked) EXPECT_FALSE(result.proposed);
-  EXPECT_TRUE(proposed_effect(diagnosis).law.empty());
-  EXPECT_NE(diagnosis.verdict.find("nothing missing"), std::string::npos) << diagnosis.verdict;
+  test::expect_nothing_proposed(test::generate_slide("none", 23).dataset);
 }
 
 }  // namespace

@@ -67,8 +67,25 @@ class TwinDropModel final : public TrialModel {
   model_tests::CommonParams common_;
 };
 
-// The twin of an experiment type (compress, slide, drop): what compare, diagnose and the generator
-// run. Throws std::invalid_argument for a type the twin does not reproduce yet.
+// Line tracks (the line's cameras following fillets on a belt): every fillet of the trial
+// appears at its first row's pose (x, y, angle: the yaw of its long axis), lying flat and moving
+// with the belt, on one belt of the equipment material driven by the trial's command log (the
+// first speed column, linear between rows; no log: the belt_speed condition); the answer is each
+// fillet's centre and yaw at each of its rows. The angle is the nearest turn to the measured
+// one (a camera's angle is wrapped, the twin's is not). Variant, mirrored and surface as the
+// slide model (a wet_film acts on surface=wet trials only).
+class TwinLineTracksModel final : public TrialModel {
+ public:
+  explicit TwinLineTracksModel(model_tests::CommonParams common);
+  [[nodiscard]] std::string describe() const override;
+  Table run(const Dataset& dataset, const Trial& trial) override;
+
+ private:
+  model_tests::CommonParams common_;
+};
+
+// The twin of an experiment type (compress, slide, drop, line_tracks): what compare, diagnose and
+// the generator run. Throws std::invalid_argument for a type the twin does not reproduce yet.
 std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
                                             const model_tests::CommonParams& common);
 

@@ -171,6 +171,41 @@ struct CompressResult {
 
 CompressResult run_compress(const CompressParams& params);
 
+// ---------------------------------------------------------------- fillets tracked on a belt
+
+// Fillets carried by one flat belt (a plane of the equipment material whose surface moves
+// along +x at the commanded speed), as the line's cameras track them: each fillet appears
+// lying flat at its first sample's pose, moving with the belt, and is tracked from then on.
+// What a takt acceleration does to them (slip, a lag, a turn) is the answer.
+struct BeltFilletSample {
+  std::size_t fillet = 0;  // index into BeltTracksParams::first_poses
+  double time_s = 0.0;
+};
+
+struct BeltPose {
+  double x_m = 0.0;  // the fillet's centre (mean of its sphere centres)
+  double y_m = 0.0;
+  double yaw_rad = 0.0;  // of the fillet's long axis (its body x axis), unwrapped from the start
+};
+
+struct BeltTracksParams {
+  CommonParams common;
+  // Belt speed, piecewise linear between the points, held before the first and after the last.
+  std::vector<double> command_time_s;
+  std::vector<double> belt_speed_m_per_s;
+  std::vector<BeltPose> first_poses;      // one per fillet: where it appears
+  std::vector<BeltFilletSample> samples;  // ascending in time; a fillet's first is its spawn
+  double command_interval_s = 0.001;      // the belt speed is updated this often
+};
+
+struct BeltTracksResult {
+  std::vector<BeltPose> poses;  // one per sample (fewer: the run became unstable)
+  double timestep_s = 0.0;
+  std::size_t particles = 0;
+};
+
+BeltTracksResult run_belt_tracks(const BeltTracksParams& params);
+
 // ---------------------------------------------------------------- drops: impact, angle, scale
 
 // One fillet dropped on a floor plane: with a speed from just above it, or from a height.

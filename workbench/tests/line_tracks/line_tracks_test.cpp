@@ -1,0 +1,181 @@
+// The line-track experiment in the workbench: fillets tracked on a commanded belt. The twin
+// carries a fillet at the belt's speed, leaves it behind on a takt harder than its friction
+// holds (against a rigid block's lag), refuses what it cannot run; the generator writes the
+// belt command logs and its hidden wet film fails the base model while the truth sits at the
+// noise. Five 7 mm fillets on a belt for 1.2 s take about 0.4 s.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+
+#include "fl/workbench/generator.hpp"
+#include "fl/workbench/twin_models.hpp"
+#include "workbench_test_support.hpp"
+
+namespace fl::workbench {
+namespace {
+
+using test::base_model;
+
+constexpr double kGravityMps2 = 9.81;        // appendix B
+constexpr double kFilletBeltFriction = 0.5;  // appendix B coulomb, fillet-equipment
+
+// One fillet appearing at (0, 20 mm, 30 deg) on a belt, tracked every 20 ms for `end_s`.
+Trial one_fillet_trial(double end_s) {
+  Trial trial;
+  trial.id = "one";
+  std::vector<double> t, id, x, y, angle;
+  for (int frame = 0; frame * 0.02 <= end_s + 1e-9; ++frame) {
+    t.push_back(frame * 0.02);
+    id.push_back(1.0);
+    x.push_back(0.0);
+    y.push_back(0.02);
+    angle.push_back(30.0 * std::numbers::pi / 180.0);
+  }
+  trial.data.channels = {{"time", *find_unit("s"), t},
+                         {"fillet", *find_unit("1"), id},
+                         {"x", *find_unit("mm"), x},
+                         {"y", *find_unit("mm"), y},
+                         {"angle", *find_unit("deg"), angle}};
+  trial.data.lines.resize(t.size());
+  return trial;
+}
+
+Dataset tracks_dataset(Trial trial) {
+  Dataset data;
+  data.experiment = ExperimentType::kLineTracks;
+  data.trials.push_back(std::move(trial));
+  return data;
+}
+
+// A belt at rest until 0.1 s, then at `acceleration` to `speed`, held.
+Table takt(double acceleration, double speed) {
+  Table commands;
+  commands.channels = {{"time", *find_unit("s"), {0.0, 0.1, 0.1 + speed / acceleration}},
+                       {"belt_speed", *find_unit("m/s"), {0.0, 0.0, speed}}};
+  commands.lines.resize(3);
+  return commands;
+}
+
+TEST(LineTracksTwin, ASteadyBeltCarriesTheFilletAtItsSpeed) {
+  Trial trial = one_fillet_trial(1.0);
+  trial.conditions["belt_speed"] = 0.5;  // no command log: the condition drives the belt
+  const Dataset data = tracks_dataset(trial);
+  TwinLineTracksModel model(base_model());
+  const Table track = model.run(data, data.trials[0]);
+  const auto& t = trial.data.at("time").values_si;
+  const auto& x = track.at("x").values_si;
+  const auto& y = track.at("y").values_si;
+  const auto& angle = track.at("angle").values_si;
+  // The first row is where the fillet appears: exactly the measured pose.
+  EXPECT_NEAR(x[0], 0.0, 1e-9);
+  EXPECT_NEAR(y[0], 0.02, 1e-9);
+  EXPECT_NEAR(angle[0], 30.0 * std::numbers::pi / 180.0, 1e-9);
+  // It appears moving with the belt and nothing pushes it: x0 + v t, the pose kept. 1 mm and
+  // 1 deg are a camera's noise; settling onto the belt must stay well inside them.
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    EXPECT_NEAR(x[k], 0.5 * t[k], 0.001) << "at " << t[k] << " s";
+    EXPECT_NEAR(y[k], 0.02, 0.001) << "at " << t[k] << " s";
+    EXPECT_NEAR(angle[k], angle[0], std::numbers::pi / 180.0) << "at " << t[k] << " s";
+  }
+}
+
+// Where the belt has carried a point of it by the end of the trial.
+double belt_travel_m(double acceleration, double speed, double end_s) {
+  const double ramp_s = speed / acceleration;
+  return 0.5 * speed * ramp_s + speed * (end_s - 0.1 - ramp_s);
+}
+
+TEST(LineTracksTwin, ATaktHarderThanTheFrictionLeavesTheFilletBehind) {
+  TwinLineTracksModel model(base_model());
+  constexpr double kSpeed = 1.5, kEndS = 0.8;
+  // 4 m/s^2 is below mu g = 4.9 m/s^2: the fillet follows the belt (a millimetre of creep in
+  // the flexible fillet's contacts at most).
+  Trial gentle = one_fillet_trial(kEndS);
+  gentle.commands = takt(4.0, kSpeed);
+  const double gentle_lag = belt_travel_m(4.0, kSpeed, kEndS) -
+                            model.run(tracks_dataset(gentle), gentle).at("x").values_si.back();
+  EXPECT_LT(std::abs(gentle_lag), 0.002);
+  // 7 m/s^2: a rigid block with Coulomb friction mu slips while the belt ramps and until it
+  // has caught up, and ends behind by (a - mu g) t_r^2 / 2 + dv^2 / (2 mu g), dv = (a - mu g)
+  // t_r: 69 mm. The fillet is no rigid block: its bottom spheres roll on the belt (the thesis'
+  // bonds pass no torque), so the belt grips it less and it falls further behind (84 mm seen).
+  // It must slip by the block's order: between half and twice the block's lag.
+  Trial hard = one_fillet_trial(kEndS);
+  hard.commands = takt(7.0, kSpeed);
+  const double mu_g = kFilletBeltFriction * kGravityMps2;
+  const double ramp_s = kSpeed / 7.0;
+  const double dv = (7.0 - mu_g) * ramp_s;
+  const double block_lag = 0.5 * (7.0 - mu_g) * ramp_s * ramp_s + dv * dv / (2.0 * mu_g);
+  const double hard_lag = belt_travel_m(7.0, kSpeed, kEndS) -
+                          model.run(tracks_dataset(hard), hard).at("x").values_si.back();
+  EXPECT_GT(hard_lag, 0.5 * block_lag) << "block " << block_lag;
+  EXPECT_LT(hard_lag, 2.0 * block_lag) << "block " << block_lag;
+}
+
+TEST(LineTracksTwin, RefusesATrialItCannotRun) {
+  const Trial trial = one_fillet_trial(0.1);  // no command log, no belt_speed
+  TwinLineTracksModel model(base_model());
+  try {
+    (void)model.run(tracks_dataset(trial), trial);
+    FAIL() << "a belt without a speed ran";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("belt_speed"), std::string::npos) << error.what();
+  }
+  Dataset other = tracks_dataset(trial);
+  other.experiment = ExperimentType::kDrop;
+  EXPECT_THROW((void)model.run(other, trial), std::runtime_error);
+}
+
+GeneratedDataset generate_tracks(const std::string& effect, std::uint64_t seed) {
+  GeneratorOptions options;
+  options.experiment = ExperimentType::kLineTracks;
+  options.effect = effect;
+  options.seed = seed;
+  options.common = base_model();
+  return generate_dataset(options);
+}
+
+TEST(LineTracksGenerator, DatasetAndCommandLogsRoundTrip) {
+  const GeneratedDataset made = generate_tracks("none", 3);
+  const auto folder = std::filesystem::temp_directory_path() / "fl_tracks_round_trip";
+  std::filesystem::remove_all(folder);
+  write_dataset(made.dataset, folder);
+  const Dataset loaded = load_dataset(folder);
+  EXPECT_EQ(loaded.experiment, ExperimentType::kLineTracks);
+  ASSERT_EQ(loaded.trials.size(), 4U);  // takt 4 and 7 m/s^2, each dry and wet
+  EXPECT_NEAR(loaded.noise_si.at("x"), 0.001, 1e-15);
+  EXPECT_NEAR(loaded.noise_si.at("angle"), std::numbers::pi / 180.0, 1e-15);
+  for (std::size_t t = 0; t < loaded.trials.size(); ++t) {
+    const Trial& a = made.dataset.trials[t];
+    const Trial& b = loaded.trials[t];
+    EXPECT_EQ(a.conditions, b.conditions);
+    ASSERT_TRUE(b.commands.has_value());
+    EXPECT_EQ(b.commands->at("belt_speed").values_si, a.commands->at("belt_speed").values_si);
+    EXPECT_EQ(b.data.rows(), 5U * 61U);  // 5 fillets, 61 frames of 20 ms
+    const auto& x = a.data.at("x").values_si;
+    const auto& y = b.data.at("x").values_si;
+    // Written in millimetres with 17 significant digits and read back: a rounding at most.
+    for (std::size_t k = 0; k < x.size(); ++k) EXPECT_NEAR(x[k], y[k], 1e-15);
+  }
+  std::filesystem::remove_all(folder);
+}
+
+TEST(LineTracksGenerator, AHiddenWetFilmFailsTheBaseModelAndNotTheTruth) {
+  const GeneratedDataset made = generate_tracks("wet_film", 3);
+  const auto score = [&made](const HiddenEffect& effect) {
+    model_tests::CommonParams common = base_model();
+    common.base_spec = with_contact_effect(common.base_spec, effect);
+    TwinLineTracksModel model(common);
+    return compare(made.dataset, model).overall("x").score;
+  };
+  // The truth leaves the noise: RMS/sigma over 1200 Gaussian positions (the first rows are the
+  // start, not residuals) is 1 within about 1/sqrt(2400) = 0.02; 0.1 is five of those.
+  EXPECT_NEAR(score(made.truth), 1.0, 0.1);
+  // A film of 30 % or more lets the fillets slip centimetres on every wet takt.
+  EXPECT_GT(score({}), 10.0);
+}
+
+}  // namespace
+}  // namespace fl::workbench
