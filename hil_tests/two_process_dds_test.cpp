@@ -76,6 +76,43 @@ std::string text(const fs::path& file) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
+struct TwoProcessRun {
+  int control_exit = -1;
+  int twin_exit = -1;
+  std::string logs;
+  nlohmann::json twin_kpis;
+  nlohmann::json control_kpis;
+
+  // Whether both processes kept their 10 ms period: no controller scan overran and no twin
+  // tick woke a whole period late. A run that did not is still judged for its books, but its
+  // KPIs may differ from the lock-step run by the fillets the stall caught (seen in CI: a
+  // 66 ms stall turned two fillets, 3.4 points of the in-spec share).
+  [[nodiscard]] bool held_the_period() const {
+    return control_kpis["runtime"]["overruns"].get<int>() == 0 &&
+           twin_kpis["twin"]["late_ticks"].get<int>() == 0;
+  }
+};
+
+TwoProcessRun run_control_and_twin(const fs::path& dir) {
+  const pid_t control = spawn(
+      {FL_LINECTL, "control", "--duration", kDuration, "--domain", kDomain, "--fifo", kControlFifo,
+       "--json", (dir / "control.json").string(), "--ledger", (dir / "ledger.csv").string()},
+      dir / "control.log");
+  const pid_t twin = spawn({FL_LINECTL, "twin", "serve", "--plant", "fast", "--seed",
+                            std::to_string(kSeed), "--duration", kDuration, "--domain", kDomain,
+                            "--fifo", kTwinFifo, "--json", (dir / "twin.json").string()},
+                           dir / "twin.log");
+  TwoProcessRun run;
+  run.twin_exit = wait_exit(twin);
+  run.control_exit = wait_exit(control);
+  run.logs = "control:\n" + text(dir / "control.log") + "\ntwin:\n" + text(dir / "twin.log");
+  if (run.twin_exit == 0 && run.control_exit == 0) {
+    run.twin_kpis = load(dir / "twin.json");
+    run.control_kpis = load(dir / "control.json");
+  }
+  return run;
+}
+
 TEST(TwoProcessDds, ControlAndTwinOverLoopbackMatchTheInProcessRun) {
   const fs::path dir = fs::path(FL_TEST_WORK_DIR) / "two_process";
   fs::create_directories(dir);
@@ -89,24 +126,24 @@ TEST(TwoProcessDds, ControlAndTwinOverLoopbackMatchTheInProcessRun) {
             dir / "inproc.log");
   ASSERT_EQ(wait_exit(reference), 0) << text(dir / "inproc.log");
 
-  const pid_t control = spawn(
-      {FL_LINECTL, "control", "--duration", kDuration, "--domain", kDomain, "--fifo", kControlFifo,
-       "--json", (dir / "control.json").string(), "--ledger", (dir / "ledger.csv").string()},
-      dir / "control.log");
-  const pid_t twin = spawn({FL_LINECTL, "twin", "serve", "--plant", "fast", "--seed",
-                            std::to_string(kSeed), "--duration", kDuration, "--domain", kDomain,
-                            "--fifo", kTwinFifo, "--json", (dir / "twin.json").string()},
-                           dir / "twin.log");
-  const int twin_exit = wait_exit(twin);
-  const int control_exit = wait_exit(control);
-  const std::string logs =
-      "control:\n" + text(dir / "control.log") + "\ntwin:\n" + text(dir / "twin.log");
-  ASSERT_EQ(twin_exit, 0) << logs;
-  ASSERT_EQ(control_exit, 0) << logs;
+  // A shared 2-core CI machine sometimes stalls both processes for tens of ms; the comparison
+  // with the lock-step run assumes real time held, so a run that visibly lost it is repeated
+  // once. The second run is judged whatever happened in it.
+  TwoProcessRun run = run_control_and_twin(dir);
+  if (run.twin_exit == 0 && run.control_exit == 0 && !run.held_the_period()) {
+    std::printf(
+        "the first run lost its period (%d controller overruns, %d late twin ticks): "
+        "running again\n",
+        run.control_kpis["runtime"]["overruns"].get<int>(),
+        run.twin_kpis["twin"]["late_ticks"].get<int>());
+    run = run_control_and_twin(dir);
+  }
+  ASSERT_EQ(run.twin_exit, 0) << run.logs;
+  ASSERT_EQ(run.control_exit, 0) << run.logs;
 
   const nlohmann::json inproc = load(dir / "inproc.json");
-  const nlohmann::json twin_kpis = load(dir / "twin.json");
-  const nlohmann::json control_kpis = load(dir / "control.json");
+  const nlohmann::json& twin_kpis = run.twin_kpis;
+  const nlohmann::json& control_kpis = run.control_kpis;
   SCOPED_TRACE("in-process: " + inproc.dump() + "\ntwin: " + twin_kpis.dump() +
                "\ncontrol: " + control_kpis.dump());
 
