@@ -1,6 +1,5 @@
 #include "fl/workbench/calibrate.hpp"
 
-#include <nlopt.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -111,24 +110,6 @@ struct Evaluator {
     return std::sqrt(r.rss / static_cast<double>(r.samples));
   }
 };
-
-struct LocalFit {
-  const Evaluator* evaluator = nullptr;
-  int evaluations = 0;
-};
-
-double local_objective(unsigned n, const double* x, double* gradient, void* data) {
-  (void)gradient;  // derivative-free
-  auto& fit = *static_cast<LocalFit*>(data);
-  ++fit.evaluations;
-  try {
-    const double rmse = fit.evaluator->rmse(std::vector<double>(x, x + n));
-    return std::isfinite(rmse) ? rmse : 1e300;
-  } catch (const std::exception& error) {
-    spdlog::debug("calibrate: a point was refused: {}", error.what());
-    return 1e300;  // a point the engine refuses is a bad point, not the end of the search
-  }
-}
 
 }  // namespace
 
@@ -280,33 +261,18 @@ Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& b
 
   if (options.max_local_evaluations > 0) {
     const auto dimensions = static_cast<unsigned>(parameters.size());
-    LocalFit fit{&evaluator, 0};
-    const std::vector<double> lower(dimensions, 0.0), upper(dimensions, 1.0);
-    // BOBYQA needs two or more dimensions; one parameter goes to a bounded Nelder-Mead.
-    nlopt_opt optimiser =
-        nlopt_create(dimensions >= 2 ? NLOPT_LN_BOBYQA : NLOPT_LN_NELDERMEAD, dimensions);
-    nlopt_set_lower_bounds(optimiser, lower.data());
-    nlopt_set_upper_bounds(optimiser, upper.data());
-    nlopt_set_min_objective(optimiser, local_objective, &fit);
-    nlopt_set_maxeval(optimiser, options.max_local_evaluations);
-    nlopt_set_xtol_rel(optimiser, 1e-3);
+    int evaluations = 0;
     // A step of a design cell's half: the design has located the basin, not the minimum.
     const double cell = 1.0 / std::pow(static_cast<double>(unit_points.size()),
                                        1.0 / static_cast<double>(dimensions));
-    const std::vector<double> step(dimensions, std::clamp(0.5 * cell, 0.01, 0.25));
-    nlopt_set_initial_step(optimiser, step.data());
-    double refined = best_rmse;
-    std::vector<double> start = x;
-    const nlopt_result status = nlopt_optimize(optimiser, start.data(), &refined);
-    nlopt_destroy(optimiser);
-    if (status < 0) {
-      spdlog::warn("calibrate: the local fit stopped with status {}", static_cast<int>(status));
-    }
-    result.evaluations += fit.evaluations;
-    if (refined < best_rmse) {
-      best_rmse = refined;
-      x = start;
-    }
+    best_rmse = detail::minimise_in_unit_box(
+        [&](const std::vector<double>& point) {
+          ++evaluations;
+          return evaluator.rmse(point);
+        },
+        x, best_rmse, std::clamp(0.5 * cell, 0.01, 0.25), options.max_local_evaluations,
+        "calibrate");
+    result.evaluations += evaluations;
   }
   for (std::size_t p = 0; p < parameters.size(); ++p) {
     result.best.push_back(from_unit(parameters[p], x[p]));

@@ -1,6 +1,5 @@
 #include "fl/workbench/diagnose.hpp"
 
-#include <nlopt.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -57,25 +56,16 @@ model_tests::CommonParams with_effect(const model_tests::CommonParams& base,
   return common;
 }
 
-double objective(unsigned n, const double* x, double* gradient, void* data) {
-  (void)n;
-  (void)gradient;  // derivative-free
-  auto& context = *static_cast<FitContext*>(data);
+// The fit trials' RSS with the candidate's parameters at a point of the unit box, counted.
+double objective(FitContext& context, const std::vector<double>& x) {
   ++context.evaluations;
-  try {
-    const double rss =
-        residuals(*context.dataset,
-                  with_effect(*context.base, *context.candidate, context.dataset->experiment, x),
-                  *context.trials)
-            .rss;
-    context.best_rss = std::min(context.best_rss, rss);
-    return std::isfinite(rss) ? rss : 1e300;
-  } catch (const std::exception& error) {
-    // A parameter set the engine refuses (an unstable timestep, say) is a bad point, not the
-    // end of the search.
-    spdlog::debug("diagnose: {} refused a point: {}", context.candidate->law, error.what());
-    return 1e300;
-  }
+  const double rss = residuals(*context.dataset,
+                               with_effect(*context.base, *context.candidate,
+                                           context.dataset->experiment, x.data()),
+                               *context.trials)
+                         .rss;
+  context.best_rss = std::min(context.best_rss, rss);
+  return rss;
 }
 
 CandidateResult fit(const Dataset& dataset, const model_tests::CommonParams& base,
@@ -88,38 +78,25 @@ CandidateResult fit(const Dataset& dataset, const model_tests::CommonParams& bas
   // (log) box: an effect can be flat over much of its range (a stick speed below the contacts'
   // creep hides any static friction), and a local search started on such a plateau stops
   // there. 2^d + 1 twin runs over the fit trials.
+  const detail::UnitBoxObjective fit_rss = [&](const std::vector<double>& point) {
+    return objective(context, point);
+  };
+  const std::string who = "diagnose: " + candidate.law;
+  const auto guarded = [&](const std::vector<double>& point) {
+    return detail::guarded_value(fit_rss, point, who);
+  };
   std::vector<double> x(dimensions, 0.5);
-  {
-    double start_rss = objective(dimensions, x.data(), nullptr, &context);
-    for (unsigned corner = 0; corner < (1U << dimensions); ++corner) {
-      std::vector<double> point(dimensions);
-      for (unsigned p = 0; p < dimensions; ++p) point[p] = (corner >> p) & 1U ? 0.75 : 0.25;
-      const double rss = objective(dimensions, point.data(), nullptr, &context);
-      if (rss < start_rss) {
-        start_rss = rss;
-        x = point;
-      }
+  double start_rss = guarded(x);
+  for (unsigned corner = 0; corner < (1U << dimensions); ++corner) {
+    std::vector<double> point(dimensions);
+    for (unsigned p = 0; p < dimensions; ++p) point[p] = (corner >> p) & 1U ? 0.75 : 0.25;
+    const double rss = guarded(point);
+    if (rss < start_rss) {
+      start_rss = rss;
+      x = point;
     }
   }
-  std::vector<double> lower(dimensions, 0.0);
-  std::vector<double> upper(dimensions, 1.0);
-  // BOBYQA needs two or more dimensions; one parameter goes to a bounded Nelder-Mead.
-  nlopt_opt optimiser =
-      nlopt_create(dimensions >= 2 ? NLOPT_LN_BOBYQA : NLOPT_LN_NELDERMEAD, dimensions);
-  nlopt_set_lower_bounds(optimiser, lower.data());
-  nlopt_set_upper_bounds(optimiser, upper.data());
-  nlopt_set_min_objective(optimiser, objective, &context);
-  nlopt_set_maxeval(optimiser, options.max_evaluations);
-  nlopt_set_xtol_rel(optimiser, 1e-3);
-  std::vector<double> step(dimensions, 0.25);
-  nlopt_set_initial_step(optimiser, step.data());
-  double best = 0.0;
-  const nlopt_result status = nlopt_optimize(optimiser, x.data(), &best);
-  nlopt_destroy(optimiser);
-  if (status < 0) {
-    spdlog::warn("diagnose: {}: the optimiser stopped with status {}", candidate.law,
-                 static_cast<int>(status));
-  }
+  detail::minimise_in_unit_box(fit_rss, x, start_rss, 0.25, options.max_evaluations, who);
   CandidateResult result;
   result.law = candidate.law;
   result.evaluations = context.evaluations;

@@ -1,5 +1,9 @@
 #include "residuals.hpp"
 
+#include <nlopt.h>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -42,6 +46,63 @@ Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& com
     r.samples += measured.size();
   }
   return r;
+}
+
+double guarded_value(const UnitBoxObjective& objective, const std::vector<double>& point,
+                     std::string_view who) {
+  try {
+    const double value = objective(point);
+    return std::isfinite(value) ? value : 1e300;
+  } catch (const std::exception& error) {
+    spdlog::debug("{}: the twin refused a point: {}", who, error.what());
+    return 1e300;
+  }
+}
+
+namespace {
+
+struct SearchContext {
+  const UnitBoxObjective* objective = nullptr;
+  std::string_view who;
+};
+
+double nlopt_objective(unsigned n, const double* x, double* gradient, void* data) {
+  (void)gradient;  // derivative-free
+  const auto& context = *static_cast<const SearchContext*>(data);
+  return guarded_value(*context.objective, std::vector<double>(x, x + n), context.who);
+}
+
+}  // namespace
+
+double minimise_in_unit_box(const UnitBoxObjective& objective, std::vector<double>& x,
+                            double start_value, double initial_step, int max_evaluations,
+                            std::string_view who) {
+  const auto dimensions = static_cast<unsigned>(x.size());
+  SearchContext context{&objective, who};
+  const std::vector<double> lower(dimensions, 0.0);
+  const std::vector<double> upper(dimensions, 1.0);
+  const std::vector<double> step(dimensions, initial_step);
+  nlopt_opt optimiser =
+      nlopt_create(dimensions >= 2 ? NLOPT_LN_BOBYQA : NLOPT_LN_NELDERMEAD, dimensions);
+  nlopt_set_lower_bounds(optimiser, lower.data());
+  nlopt_set_upper_bounds(optimiser, upper.data());
+  nlopt_set_min_objective(optimiser, nlopt_objective, &context);
+  nlopt_set_maxeval(optimiser, max_evaluations);
+  nlopt_set_xtol_rel(optimiser, 1e-3);
+  nlopt_set_initial_step(optimiser, step.data());
+  double best = start_value;
+  std::vector<double> found = x;
+  double found_value = best;
+  const nlopt_result status = nlopt_optimize(optimiser, found.data(), &found_value);
+  nlopt_destroy(optimiser);
+  if (status < 0) {
+    spdlog::warn("{}: the local search stopped with status {}", who, static_cast<int>(status));
+  }
+  if (found_value < best) {
+    best = found_value;
+    x = found;
+  }
+  return best;
 }
 
 }  // namespace fl::workbench::detail
