@@ -11,7 +11,7 @@ packages=(
   libopencv-dev cyclonedds-dev cyclonedds-tools openssl
   rt-tests python3
   qemu-system-x86 busybox-static can-utils
-  libzstd-dev liblz4-dev libnlopt-dev
+  libzstd-dev liblz4-dev libdeflate-dev libnlopt-dev
   dpkg-dev debootstrap systemd
   libcivetweb-dev libssl-dev chromium
 )

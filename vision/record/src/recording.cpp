@@ -10,12 +10,14 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <set>
 #include <sstream>
 
 #include "fl/mcap/reader.hpp"
 #include "fl/mcap/writer.hpp"
 #include "idl_text.hpp"
+#include "png_decode.hpp"
 
 namespace fl::vision::record {
 namespace {
@@ -704,7 +706,10 @@ Recording load_recording(const std::filesystem::path& path) {
 
 cv::Mat decode_frame(const RecordedFrame& frame) {
   cv::Mat image;
-  if (!frame.data.empty()) image = cv::imdecode(frame.data, cv::IMREAD_UNCHANGED);
+  if (!frame.data.empty()) {
+    std::optional<cv::Mat> fast = detail::decode_png_fast(frame.data);
+    image = fast ? std::move(*fast) : cv::imdecode(frame.data, cv::IMREAD_UNCHANGED);
+  }
   if (image.empty()) {
     throw RecordingError(frame.where + ": PNG data (" + std::to_string(frame.data.size()) +
                          " bytes) does not decode");
