@@ -12,6 +12,8 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
 
@@ -418,6 +420,33 @@ void mcap_seeds(const fs::path& directory) {
 
 }  // namespace
 
+// ---------------------------------------------------------------- fuzz_png_frames
+
+// Small frames as the recorder writes them (cv::imencode): grey and colour, a smooth
+// gradient and noise (which make libpng choose different row filters), fast and best zlib.
+void png_seeds(const fs::path& directory) {
+  cv::RNG random(7);
+  for (const int channels : {1, 3}) {
+    for (const bool noisy : {false, true}) {
+      cv::Mat image(12, 16, CV_8UC(channels));
+      for (int y = 0; y < image.rows; ++y) {
+        for (int i = 0; i < image.cols * channels; ++i) {
+          image.ptr<std::uint8_t>(y)[i] =
+              static_cast<std::uint8_t>(noisy ? random.uniform(0, 256) : 10 * y + i);
+        }
+      }
+      for (const int level : {1, 9}) {
+        std::vector<std::uint8_t> png;
+        cv::imencode(".png", image, png, {cv::IMWRITE_PNG_COMPRESSION, level});
+        save(directory,
+             "frame_c" + std::to_string(channels) + (noisy ? "_noise" : "_gradient") + "_z" +
+                 std::to_string(level) + ".png",
+             png);
+      }
+    }
+  }
+}
+
 int main(int argc, char** argv) {
   if (argc != 2) {
     std::cerr << "usage: fuzz_make_seeds CORPUS_DIR (fuzz/corpus)\n";
@@ -433,6 +462,7 @@ int main(int argc, char** argv) {
     dds_samples_seeds(corpus / "fuzz_dds_samples");
     cdr_seeds(corpus / "fuzz_cdr");
     mcap_seeds(corpus / "fuzz_mcap_reader");
+    png_seeds(corpus / "fuzz_png_frames");
   } catch (const std::exception& error) {
     std::cerr << "fuzz_make_seeds: " << error.what() << "\n";
     return 1;

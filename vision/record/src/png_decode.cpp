@@ -14,6 +14,7 @@ namespace {
 
 constexpr std::array<std::uint8_t, 8> kSignature{0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
 constexpr std::uint64_t kMaxPixels = std::uint64_t{1} << 26;  // 8192 x 8192
+constexpr std::size_t kMaxDeflateRatio = 1032;
 
 std::uint32_t read_be32(const std::uint8_t* bytes) {
   return (std::uint32_t{bytes[0]} << 24) | (std::uint32_t{bytes[1]} << 16) |
@@ -133,6 +134,9 @@ std::optional<cv::Mat> decode_png_fast(std::span<const std::uint8_t> png) {
 
   const std::size_t row_bytes = width * channels;
   const std::size_t filtered_bytes = height * (row_bytes + 1);
+  // DEFLATE expands at most 1032-fold: a header promising more than the data can hold is
+  // refused before its buffer is allocated.
+  if (filtered_bytes / kMaxDeflateRatio > compressed.size()) return std::nullopt;
   std::vector<std::uint8_t> filtered(filtered_bytes);
   std::size_t produced = 0;
   if (libdeflate_zlib_decompress(thread_decompressor(), compressed.data(), compressed.size(),

@@ -14,7 +14,8 @@ namespace fl::vision::record::detail {
 // The image of an 8-bit grey (CV_8UC1) or RGB (CV_8UC3, in OpenCV's BGR order) PNG without
 // interlacing, decoded bit-exactly with every chunk CRC and the zlib checksum verified.
 // Nothing for any other PNG, for a corrupt one (bad signature, CRC, header or compressed
-// data, wrong size, unknown row filter) and for one above 2^26 pixels: the caller hands those
+// data, wrong size, unknown row filter, more pixels than its data could hold) and for one
+// above 2^26 pixels: the caller hands those
 // to cv::imdecode, which decodes them or reports them undecodable.
 std::optional<cv::Mat> decode_png_fast(std::span<const std::uint8_t> png);
 
