@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cmath>
 #include <ctime>
 #include <fstream>
 #include <memory>
@@ -249,6 +250,27 @@ int calibrate_command(const CalibrateArgs& args) {
   }
   spdlog::info("to take it, set these in config/dem.yaml (every law the address names):\n{}",
                change);
+  const auto rms_text = [](double rmse) {
+    return std::isfinite(rmse) ? fmt::format("{:.4g}", rmse) : std::string("-");
+  };
+  std::string sensitivity;
+  for (std::size_t p = 0; p < parameters.size(); ++p) {
+    const ParameterSensitivity& s = result.sensitivity[p];
+    sensitivity += fmt::format("  {}: at {:.4g} down to {:.4g}: {}, up to {:.4g}: {} -> {}\n",
+                               parameters[p].address, result.best[p], s.value_down,
+                               rms_text(s.rmse_down), s.value_up, rms_text(s.rmse_up),
+                               s.determined ? "determined" : "NOT determined by this dataset");
+  }
+  spdlog::info("sensitivity, RMS (SI) with each parameter alone moved a tenth of its box:\n{}",
+               sensitivity);
+  try {
+    for (const fs::path& plot : write_sensitivity_plots(result, out)) {
+      spdlog::info("sensitivity plot: {}", plot.string());
+    }
+  } catch (const std::exception& error) {
+    spdlog::error("{}", error.what());
+    return 1;
+  }
   spdlog::info("calibration: {}", (out / "calibration.json").string());
   return 0;
 }

@@ -11,6 +11,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "fl/report/svg_plot.hpp"
 #include "fl/twin/dem/config.hpp"
 #include "residuals.hpp"
 
@@ -194,6 +195,91 @@ dem::ModelSpec with_calibrated(const dem::ModelSpec& spec,
   return calibrated;
 }
 
+namespace {
+
+// A tenth of the box either way, as ParameterSensitivity describes.
+constexpr double kSensitivityStep = 0.1;
+// chi-square with one degree of freedom at 95 %: the likelihood-ratio test's threshold.
+constexpr double kChiSquare95OneParameter = 3.841;
+
+std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
+                                                const std::vector<CalibratedParameter>& parameters,
+                                                const std::vector<double>& best_unit,
+                                                const Calibration& result,
+                                                const std::vector<std::vector<double>>& unit_points,
+                                                int slices, bool factorial, int threads) {
+  const std::size_t dimensions = parameters.size();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // The moves: 2 per parameter, run on every core; a move past the box is not made.
+  std::vector<std::vector<double>> moves;
+  std::vector<double> moved_rmse(2 * dimensions, nan);
+  for (std::size_t p = 0; p < dimensions; ++p) {
+    for (const double direction : {-1.0, 1.0}) {
+      std::vector<double> point = best_unit;
+      point[p] += direction * kSensitivityStep;
+      moves.push_back(point);
+    }
+  }
+  model_tests::parallel_for(
+      moves.size(), std::max(1, threads),
+      [&](std::size_t k) {
+        const double u = moves[k][k / 2];
+        if (u < 0.0 || u > 1.0) return;
+        moved_rmse[k] = detail::guarded_value(
+            [&](const std::vector<double>& point) { return evaluator.rmse(point); }, moves[k],
+            "calibrate: sensitivity");
+        if (moved_rmse[k] >= 1e300) moved_rmse[k] = nan;
+      },
+      [](std::size_t, std::size_t) {});
+
+  const auto n = static_cast<double>(result.samples);
+  const double free_samples = std::max(1.0, n - static_cast<double>(dimensions));
+  const double variance = result.noise_si > 0.0 ? result.noise_si * result.noise_si
+                                                : result.rmse * result.rmse * n / free_samples;
+  const double threshold = kChiSquare95OneParameter * variance;
+  std::vector<ParameterSensitivity> out(dimensions);
+  for (std::size_t p = 0; p < dimensions; ++p) {
+    ParameterSensitivity& s = out[p];
+    s.value_down = from_unit(parameters[p], std::max(0.0, best_unit[p] - kSensitivityStep));
+    s.value_up = from_unit(parameters[p], std::min(1.0, best_unit[p] + kSensitivityStep));
+    s.rmse_down = moved_rmse[2 * p];
+    s.rmse_up = moved_rmse[2 * p + 1];
+    int moves_made = 0;
+    int significant = 0;
+    for (std::size_t side = 0; side < 2; ++side) {
+      const double u = moves[2 * p + side][p];
+      if (u < 0.0 || u > 1.0) continue;
+      ++moves_made;
+      const double rmse = moved_rmse[2 * p + side];
+      // A refused point counts as significant: the model cannot even run there.
+      if (std::isnan(rmse) || n * (rmse * rmse - result.rmse * result.rmse) > threshold) {
+        ++significant;
+      }
+    }
+    s.determined = moves_made > 0 && significant == moves_made;
+    std::vector<double> sum(static_cast<std::size_t>(slices), 0.0);
+    std::vector<int> count(static_cast<std::size_t>(slices), 0);
+    for (std::size_t k = 0; k < unit_points.size(); ++k) {
+      if (!result.design[k].failure.empty()) continue;
+      const auto slice = static_cast<std::size_t>(
+          std::min(slices - 1, static_cast<int>(unit_points[k][p] * slices)));
+      sum[slice] += result.design[k].rmse;
+      ++count[slice];
+    }
+    for (std::size_t slice = 0; slice < sum.size(); ++slice) {
+      const double index = static_cast<double>(slice);
+      const double u = !factorial    ? (index + 0.5) / slices
+                       : slices == 1 ? 0.5
+                                     : index / (slices - 1);
+      s.main_effect_values.push_back(from_unit(parameters[p], u));
+      s.main_effect_rmse.push_back(count[slice] > 0 ? sum[slice] / count[slice] : nan);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& base,
                       const std::vector<CalibratedParameter>& parameters,
                       const CalibrationOptions& options) {
@@ -220,6 +306,7 @@ Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& b
   {
     const detail::Residuals r = detail::residuals(dataset, model, evaluator.trials);
     result.base_rmse = std::sqrt(r.rss / static_cast<double>(r.samples));
+    result.samples = r.samples;
   }
   spdlog::info("calibrate: base model RMS {:.4g} (SI); {} design points of {} parameters",
                result.base_rmse, unit_points.size(), parameters.size());
@@ -278,6 +365,12 @@ Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& b
     result.best.push_back(from_unit(parameters[p], x[p]));
   }
   result.rmse = best_rmse;
+  // Factorial designs slice by their levels; a Hammersley set is sliced in quarters.
+  const bool factorial = options.design == DesignKind::kFullFactorial;
+  const int slices = factorial ? std::max(1, options.factorial_levels) : 4;
+  result.sensitivity = sensitivities(evaluator, parameters, x, result, unit_points, slices,
+                                     factorial, options.threads);
+  result.evaluations += static_cast<int>(2 * parameters.size());
   spdlog::info("calibrate: RMS {:.4g} -> {:.4g} (SI) in {} twin evaluations", result.base_rmse,
                result.rmse, result.evaluations);
   return result;
@@ -290,6 +383,7 @@ std::string calibration_json(const Calibration& calibration) {
   out["rmse_si"] = calibration.rmse;
   out["noise_si"] = calibration.noise_si;
   out["evaluations"] = calibration.evaluations;
+  out["samples"] = calibration.samples;
   for (std::size_t p = 0; p < calibration.parameters.size(); ++p) {
     const CalibratedParameter& parameter = calibration.parameters[p];
     out["parameters"].push_back({{"address", parameter.address},
@@ -298,6 +392,19 @@ std::string calibration_json(const Calibration& calibration) {
                                  {"log", parameter.log},
                                  {"base", calibration.base_values[p]},
                                  {"calibrated", calibration.best[p]}});
+    if (p < calibration.sensitivity.size()) {
+      const ParameterSensitivity& s = calibration.sensitivity[p];
+      // NaN (a move not made, a point refused) is written as null.
+      const auto number = [](double value) {
+        return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+      };
+      nlohmann::json main_effect = nlohmann::json::array();
+      for (const double rmse : s.main_effect_rmse) main_effect.push_back(number(rmse));
+      out["parameters"].back()["sensitivity"] = {
+          {"value_down", s.value_down}, {"rmse_down_si", number(s.rmse_down)},
+          {"value_up", s.value_up},     {"rmse_up_si", number(s.rmse_up)},
+          {"determined", s.determined}, {"main_effect_rmse_si", main_effect}};
+    }
   }
   out["design"] = nlohmann::json::array();
   for (const DesignRun& run : calibration.design) {
@@ -310,6 +417,61 @@ std::string calibration_json(const Calibration& calibration) {
     out["design"].push_back(point);
   }
   return out.dump(1);
+}
+
+std::vector<std::filesystem::path> write_sensitivity_plots(const Calibration& calibration,
+                                                           const std::filesystem::path& folder) {
+  std::vector<std::filesystem::path> written;
+  for (std::size_t p = 0; p < calibration.parameters.size() && p < calibration.sensitivity.size();
+       ++p) {
+    const CalibratedParameter& parameter = calibration.parameters[p];
+    const ParameterSensitivity& s = calibration.sensitivity[p];
+    report::Plot plot;
+    plot.title = parameter.address +
+                 (s.determined ? ": determined by the data" : ": not determined by the data");
+    plot.x.label = parameter.address;
+    plot.x.log = parameter.log;
+    plot.y.label = "RMS of " + calibration.channel + " (SI)";
+    report::Series design;
+    design.label = "design points";
+    design.style = report::SeriesStyle::kScatter;
+    for (const DesignRun& run : calibration.design) {
+      if (!run.failure.empty()) continue;
+      design.x.push_back(run.values[p]);
+      design.y.push_back(run.rmse);
+    }
+    if (!design.x.empty()) plot.series.push_back(std::move(design));
+    report::Series main_effect;
+    main_effect.label = "main effect (mean per slice)";
+    main_effect.style = report::SeriesStyle::kLineAndMarkers;
+    for (std::size_t slice = 0; slice < s.main_effect_rmse.size(); ++slice) {
+      if (!std::isfinite(s.main_effect_rmse[slice])) continue;
+      main_effect.x.push_back(s.main_effect_values[slice]);
+      main_effect.y.push_back(s.main_effect_rmse[slice]);
+    }
+    if (!main_effect.x.empty()) plot.series.push_back(std::move(main_effect));
+    report::Series local;
+    local.label = "moved a tenth of the box";
+    local.style = report::SeriesStyle::kLineAndMarkers;
+    const std::array<std::pair<double, double>, 3> around{{{s.value_down, s.rmse_down},
+                                                           {calibration.best[p], calibration.rmse},
+                                                           {s.value_up, s.rmse_up}}};
+    for (const auto& [value, rmse] : around) {
+      if (!std::isfinite(rmse)) continue;
+      local.x.push_back(value);
+      local.y.push_back(rmse);
+    }
+    plot.series.push_back(std::move(local));
+    plot.references.push_back(
+        {.vertical = true, .value = calibration.best[p], .label = "calibrated"});
+    if (calibration.noise_si > 0.0) {
+      plot.references.push_back({false, calibration.noise_si, "noise"});
+    }
+    const std::filesystem::path file = folder / ("sensitivity_" + std::to_string(p + 1) + ".svg");
+    report::write_svg(plot, file);
+    written.push_back(file);
+  }
+  return written;
 }
 
 }  // namespace fl::workbench

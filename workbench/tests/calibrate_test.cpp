@@ -1,11 +1,15 @@
 // Calibration of the base model: parameter boxes parsed and malformed ones refused, the two
 // designs of experiments, addresses resolved in the DEM model, and the bond stiffness of a
-// compression dataset recovered from a twin whose stiffness is off by a factor of 1.8.
+// compression dataset recovered from a twin whose stiffness is off by a factor of 1.8, and the
+// sensitivity that tells a determined parameter from one the data say nothing about.
 #include "fl/workbench/calibrate.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
 #include <set>
 
 #include "fl/twin/dem/config.hpp"
@@ -135,6 +139,56 @@ TEST(Calibrate, RecoversTheBondStiffnessOfACompressionDataset) {
       std::min_element(result.design.begin(), result.design.end(),
                        [](const DesignRun& a, const DesignRun& b) { return a.rmse < b.rmse; });
   EXPECT_LE(result.rmse, best_design->rmse);
+}
+
+TEST(Calibrate, SensitivitySaysWhichParametersTheDataDetermine) {
+  // A compression between smooth plates: the plate force follows the bond stiffness (a tenth
+  // of a 10x log box is a 26 % step: far beyond the 0.01 N noise), while the friction with the
+  // plates has nothing to act on (the block is pressed straight down). The stiffness must come
+  // out determined and the friction not; the truth is 1.8 times appendix B's stiffness.
+  GeneratorOptions options;
+  options.effect = "none";
+  options.force_noise_n = test::kNoiseN;
+  options.common = test::base_model();
+  options.common.base_spec = with_calibrated(
+      options.common.base_spec, {{"bond.normal_stiffness_n_per_m3", 1.0, 2.0, false}}, {1.8e6});
+  const Dataset data = generate_dataset(options).dataset;
+  CalibrationOptions calibration;
+  calibration.hammersley_points = 8;
+  calibration.max_local_evaluations = 20;
+  const Calibration result =
+      calibrate(data, test::base_model(),
+                {parse_calibrated_parameter("bond.normal_stiffness_n_per_m3=3e5:1e7:log"),
+                 parse_calibrated_parameter("fillet_equipment.coulomb.friction_coefficient=0.1:1")},
+                calibration);
+  ASSERT_EQ(result.sensitivity.size(), 2U);
+  const ParameterSensitivity& stiffness = result.sensitivity[0];
+  const ParameterSensitivity& friction = result.sensitivity[1];
+  EXPECT_TRUE(stiffness.determined);
+  EXPECT_GT(stiffness.rmse_down, 2.0 * result.rmse);
+  EXPECT_GT(stiffness.rmse_up, 2.0 * result.rmse);
+  EXPECT_FALSE(friction.determined);
+  // The moves are a tenth of the box around the calibrated value, inside the box.
+  EXPECT_NEAR(std::log(stiffness.value_up / stiffness.value_down), 0.2 * std::log(1e7 / 3e5), 1e-9);
+  EXPECT_LT(friction.value_down, result.best[1]);
+  EXPECT_GT(friction.value_up, result.best[1]);
+  EXPECT_GE(friction.value_down, 0.1);
+  EXPECT_LE(friction.value_up, 1.0);
+  // The Hammersley design is sliced in quarters; every quarter of 8 points has some.
+  ASSERT_EQ(stiffness.main_effect_rmse.size(), 4U);
+  for (const double rmse : stiffness.main_effect_rmse) EXPECT_TRUE(std::isfinite(rmse));
+  EXPECT_GE(result.evaluations, 1 + 8 + 4);  // the base model, the design, the four moves
+
+  const std::filesystem::path folder =
+      std::filesystem::path(testing::TempDir()) / "calibrate_sensitivity_plots";
+  const std::vector<std::filesystem::path> plots = write_sensitivity_plots(result, folder);
+  ASSERT_EQ(plots.size(), 2U);
+  for (const std::filesystem::path& plot : plots) {
+    EXPECT_GT(std::filesystem::file_size(plot), 0U) << plot;
+  }
+  const nlohmann::json json = nlohmann::json::parse(calibration_json(result));
+  EXPECT_TRUE(json["parameters"][0]["sensitivity"]["determined"].get<bool>());
+  EXPECT_FALSE(json["parameters"][1]["sensitivity"]["determined"].get<bool>());
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 //   parameters, result.best);
 #pragma once
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -56,16 +57,41 @@ struct DesignRun {
   std::string failure;         // non-empty: the twin could not run this point (why)
 };
 
+// How well the dataset pins one calibrated parameter down around the calibrated point. Locally:
+// the RMS with that parameter alone moved a tenth of its box down and up (a tenth of the
+// decades for a log box), and whether each move raises the residual sum of squares by more
+// than the noise explains: a likelihood-ratio test at 95 % for one parameter, n (RMS_moved^2 -
+// RMS^2) > 3.84 sigma^2, with sigma the dataset's noise or, where it gives none, the calibrated
+// residual's own (RSS / (n - parameters)). Over the design: the main effect, the mean RMS of
+// the design points in each slice of the box.
+struct ParameterSensitivity {
+  // The moved values and the RMS there; a move at an edge of the box is not made (NaN), and a
+  // point the twin refused has a NaN RMS.
+  double value_down = 0.0;
+  double value_up = 0.0;
+  double rmse_down = 0.0;
+  double rmse_up = 0.0;
+  // Every move made raises the error beyond the noise: the data determine the parameter here.
+  bool determined = false;
+  // Design points by slice of the box (factorial: one per level; Hammersley: quarters), the
+  // mean RMS of those the twin ran; NaN for a slice without any. The values: each slice's
+  // level or middle, in the parameter's unit.
+  std::vector<double> main_effect_values;
+  std::vector<double> main_effect_rmse;
+};
+
 struct Calibration {
   std::string channel;
   std::vector<CalibratedParameter> parameters;
   std::vector<double> base_values;  // the model's own values before calibration
   double base_rmse = 0.0;
-  std::vector<DesignRun> design;  // in design order
-  std::vector<double> best;       // calibrated values, one per parameter
-  double rmse = 0.0;              // with `best`
-  double noise_si = 0.0;          // the dataset's, when given
-  int evaluations = 0;            // twin evaluations in all (every trial each)
+  std::vector<DesignRun> design;                  // in design order
+  std::vector<double> best;                       // calibrated values, one per parameter
+  double rmse = 0.0;                              // with `best`
+  double noise_si = 0.0;                          // the dataset's, when given
+  int evaluations = 0;                            // twin evaluations in all (every trial each)
+  std::size_t samples = 0;                        // rows of the judged channel over every trial
+  std::vector<ParameterSensitivity> sensitivity;  // one per parameter
 };
 
 // The spec with each parameter set to its value. Throws std::invalid_argument naming the
@@ -82,7 +108,15 @@ Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& b
                       const std::vector<CalibratedParameter>& parameters,
                       const CalibrationOptions& options);
 
-// The calibration as JSON (the design, the best values, errors before and after).
+// The calibration as JSON (the design, the best values, errors before and after, and each
+// parameter's sensitivity).
 std::string calibration_json(const Calibration& calibration);
+
+// One SVG per parameter in `folder` (sensitivity_<k>.svg, k from 1): the design's RMS against
+// the parameter's value (points), its main effect (line), the local moves around the
+// calibrated value, and the noise and the calibrated value as reference lines. Returns the
+// files written; throws fl::report::ReportError naming a file that cannot be written.
+std::vector<std::filesystem::path> write_sensitivity_plots(const Calibration& calibration,
+                                                           const std::filesystem::path& folder);
 
 }  // namespace fl::workbench
