@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <map>
 #include <numbers>
 #include <stdexcept>
 #include <unordered_map>
@@ -108,6 +109,21 @@ FilletTemplate generate_fillet_template(const TriangleMesh& mesh_m, const std::s
   for (const auto& index : indices)
     result.types.push_back(is_type_a(index) ? kFilletTypeA : kFilletTypeB);
 
+  // Each raster column's thickness, bottom of its lowest sphere to top of its highest: where a
+  // bond sits in a thin tip or a thick rear (graded bond laws scale with it).
+  std::map<std::pair<std::int64_t, std::int64_t>, std::pair<std::int64_t, std::int64_t>> column_k;
+  for (const auto& index : indices) {
+    const auto [found, added] = column_k.try_emplace({index.i, index.j}, index.k, index.k);
+    if (!added) {
+      found->second.first = std::min(found->second.first, index.k);
+      found->second.second = std::max(found->second.second, index.k);
+    }
+  }
+  const auto column_thickness_m = [&](const RasterIndex& index) {
+    const auto& [low, high] = column_k.at({index.i, index.j});
+    return static_cast<double>(high - low) * pitch_m + 2.0 * radius_m;
+  };
+
   // Bonds: A-B pairs whose contact radii overlap. Only raster offsets with an odd index sum
   // join an A to a B; search every such offset within reach, each pair once (offset > 0 in
   // lexicographic order).
@@ -137,7 +153,9 @@ FilletTemplate generate_fillet_template(const TriangleMesh& mesh_m, const std::s
           if (other == index_of.end()) continue;
           const auto a = static_cast<std::uint32_t>(n);
           const auto b = other->second;
-          result.bonds.push_back({std::min(a, b), std::max(a, b), contact_radius_m});
+          const double thickness_m =
+              0.5 * (column_thickness_m(here) + column_thickness_m(other->first));
+          result.bonds.push_back({std::min(a, b), std::max(a, b), contact_radius_m, thickness_m});
         }
       }
     }

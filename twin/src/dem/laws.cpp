@@ -220,6 +220,7 @@ bool run_bond_batch(const BondBatch& b, PerBond&& per_bond) {
     g.rest_length_m = bond.rest_length_m;
     g.bond_radius_m = bond.bond_radius_m;
     g.break_distance_m = bond.break_distance_m;
+    g.thickness_m = bond.thickness_m;
     g.timestep_s = b.timestep_s;
     BondForce f;
     per_bond(g, state, f);
@@ -304,9 +305,33 @@ struct PlasticNormal {
   double yield_strength_pa;
 };
 
+// How a bond's stiffnesses vary from bond to bond: the factor on both spring constants.
+struct UniformStiffness {  // bpm and its normal-force variants: one stiffness everywhere
+  static constexpr bool kNeedsThickness = false;
+  explicit UniformStiffness(const LawParameters&) {}
+  [[nodiscard]] double scale(double /*thickness_m*/) const { return 1.0; }
+};
+
+// Stiffness graded with the fillet's local thickness, k(t) = k (t / t_ref)^n: one stiffness
+// for the whole fillet made the thesis's tip too flexible and its rear too rigid (6.3, 7.2).
+// n > 0 stiffens the thick rear against the thin tip, n < 0 the reverse; t_ref is where the
+// base stiffness holds. Strengths stay stresses: grading moves stiffness, not failure.
+struct ThicknessGradedStiffness {
+  static constexpr bool kNeedsThickness = true;
+  explicit ThicknessGradedStiffness(const LawParameters& p)
+      : reference_thickness_m(p.at("reference_thickness_m")),
+        thickness_exponent(p.at("thickness_exponent")) {}
+  [[nodiscard]] double scale(double thickness_m) const {
+    return std::pow(thickness_m / reference_thickness_m, thickness_exponent);
+  }
+  double reference_thickness_m;
+  double thickness_exponent;
+};
+
 // Bonded particle model (see above) with a normal-force policy: "bpm" (ElasticNormal),
-// "bpm_viscoelastic" (MaxwellNormal), "bpm_plastic" (PlasticNormal).
-template <typename Normal>
+// "bpm_viscoelastic" (MaxwellNormal), "bpm_plastic" (PlasticNormal); and a stiffness grading:
+// "bpm_graded" (ElasticNormal, ThicknessGradedStiffness).
+template <typename Normal, typename Grading = UniformStiffness>
 class BondedParticleModel final : public BondLaw {
  public:
   BondedParticleModel(const LawParameters& parameters, const PairMaterial&)
@@ -315,11 +340,12 @@ class BondedParticleModel final : public BondLaw {
         normal_strength_(parameters.at("normal_strength_pa")),
         shear_strength_(parameters.at("shear_strength_pa")),
         disk_scale_(parameters.at("bonded_disk_scale")),
-        normal_(parameters) {}
+        normal_(parameters),
+        grading_(parameters) {}
 
   void compute(const BondGeometry& g, BondState& state, BondForce& f) const override {
     update(g, state, f);
-    if (!state.broken) f.elastic_energy_j = elastic_energy_j(state, g.bond_radius_m);
+    if (!state.broken) f.elastic_energy_j = energy_j(state, g.bond_radius_m, g.thickness_m);
   }
 
   bool compute_batch(const BondBatch& batch) const override {
@@ -328,21 +354,27 @@ class BondedParticleModel final : public BondLaw {
     });
   }
 
-  [[nodiscard]] double elastic_energy_j(const BondState& state,
-                                        double bond_radius_m) const override {
-    const double area = area_m2(bond_radius_m);
-    return normal_.normal_energy_j(state, normal_stiffness_ * area, area) +
-           state.shear_force_n.squaredNorm() / (2.0 * shear_stiffness_ * area);
+  [[nodiscard]] double elastic_energy_j(const BondState& state, const Bond& bond) const override {
+    return energy_j(state, bond.bond_radius_m, bond.thickness_m);
   }
 
-  [[nodiscard]] double normal_stiffness_n_per_m(double bond_radius_m) const override {
-    return normal_stiffness_ * area_m2(bond_radius_m);
+  [[nodiscard]] double normal_stiffness_n_per_m(const Bond& bond) const override {
+    return normal_stiffness_ * grading_.scale(bond.thickness_m) * area_m2(bond.bond_radius_m);
   }
-  [[nodiscard]] double shear_stiffness_n_per_m(double bond_radius_m) const override {
-    return shear_stiffness_ * area_m2(bond_radius_m);
+  [[nodiscard]] double shear_stiffness_n_per_m(const Bond& bond) const override {
+    return shear_stiffness_ * grading_.scale(bond.thickness_m) * area_m2(bond.bond_radius_m);
   }
+  [[nodiscard]] bool needs_bond_thickness() const override { return Grading::kNeedsThickness; }
 
  private:
+  [[nodiscard]] double energy_j(const BondState& state, double bond_radius_m,
+                                double thickness_m) const {
+    const double area = area_m2(bond_radius_m);
+    const double scale = grading_.scale(thickness_m);
+    return normal_.normal_energy_j(state, normal_stiffness_ * scale * area, area) +
+           state.shear_force_n.squaredNorm() / (2.0 * shear_stiffness_ * scale * area);
+  }
+
   [[nodiscard]] double area_m2(double bond_radius_m) const {
     const double radius = disk_scale_ * bond_radius_m;
     return kPi * radius * radius;
@@ -354,11 +386,12 @@ class BondedParticleModel final : public BondLaw {
       return;
     }
     const double area = area_m2(g.bond_radius_m);
+    const double scale = grading_.scale(g.thickness_m);
     const double normal_velocity = g.relative_velocity_m_per_s.dot(g.normal);
     const Vec3 tangential_velocity = g.relative_velocity_m_per_s - normal_velocity * g.normal;
-    state.normal_force_n = normal_.force_n(g, state, normal_stiffness_ * area, area);
+    state.normal_force_n = normal_.force_n(g, state, normal_stiffness_ * scale * area, area);
     rotate_into_tangent_plane(state.shear_force_n, g.normal);
-    state.shear_force_n -= shear_stiffness_ * area * g.timestep_s * tangential_velocity;
+    state.shear_force_n -= shear_stiffness_ * scale * area * g.timestep_s * tangential_velocity;
     const double shear_limit_n = shear_strength_ * area;
     if (-state.normal_force_n > normal_strength_ * area ||
         state.shear_force_n.squaredNorm() > shear_limit_n * shear_limit_n) {
@@ -375,6 +408,7 @@ class BondedParticleModel final : public BondLaw {
   double shear_strength_;
   double disk_scale_;
   Normal normal_;
+  Grading grading_;
 };
 
 // ---- effects (issue 6's effect library): off unless an interaction's chain names them
@@ -707,6 +741,11 @@ void register_builtin_laws(LawRegistry& registry) {
   registry.add_bond_law({"bpm_plastic", "bpm, perfectly plastic beyond a normal yield stress",
                          with({{"normal_yield_strength_pa", "Pa", 1e-30, kHuge, std::nullopt}}),
                          make_bond_law<BondedParticleModel<PlasticNormal>>});
+  registry.add_bond_law(
+      {"bpm_graded", "bpm with stiffnesses graded by the fillet's local thickness (t/t_ref)^n",
+       with({{"reference_thickness_m", "m", 1e-4, 1.0, std::nullopt},
+             {"thickness_exponent", "-", -4.0, 4.0, std::nullopt}}),
+       make_bond_law<BondedParticleModel<ElasticNormal, ThicknessGradedStiffness>>});
   registry.add_contact_law({"rolling_resistance",
                             "constant directional rolling torque mu_r R* |load|",
                             {{"rolling_friction", "-", 0.0, 10.0, std::nullopt}},

@@ -250,8 +250,16 @@ std::uint32_t Simulation::add_body(std::span<const Vec3> positions_m,
     b.rest_length_m = (state_.position_m[b.i] - state_.position_m[b.j]).norm();
     b.bond_radius_m = std::min(state_.radius_m[b.i], state_.radius_m[b.j]);
     b.break_distance_m = 2.0 * bond.contact_radius_m;
-    if (model_->interaction(state_.type[b.i], state_.type[b.j]).bond_law == nullptr) {
+    b.thickness_m = bond.thickness_m;
+    const BondLaw* law = model_->interaction(state_.type[b.i], state_.type[b.j]).bond_law.get();
+    if (law == nullptr) {
       throw std::invalid_argument("dem add_body: no bond law for the types of a bond");
+    }
+    if (law->needs_bond_thickness() && !(bond.thickness_m > 0.0)) {
+      throw std::invalid_argument(
+          "dem add_body: the bond law grades its stiffness with the body's thickness, but bond " +
+          std::to_string(bond.i) + "-" + std::to_string(bond.j) +
+          " has none (BodyBond::thickness_m)");
     }
     state_.bonds.push_back(b);
     state_.bond_states.emplace_back();
@@ -1055,7 +1063,7 @@ EnergyReport Simulation::energy() const {
   for (std::size_t k = 0; k < s.bonds.size(); ++k) {  // from the bond states of the last step
     if (s.bond_states[k].broken) continue;
     const BondLaw& law = *model_->interaction(s.type[s.bonds[k].i], s.type[s.bonds[k].j]).bond_law;
-    report.bond_elastic_j += law.elastic_energy_j(s.bond_states[k], s.bonds[k].bond_radius_m);
+    report.bond_elastic_j += law.elastic_energy_j(s.bond_states[k], s.bonds[k]);
   }
   return report;
 }
@@ -1072,8 +1080,8 @@ TimestepReport Simulation::check_timestep() const {
     if (s.bond_states[k].broken) continue;
     const Bond& b = s.bonds[k];
     const BondLaw& law = *model_->interaction(s.type[b.i], s.type[b.j]).bond_law;
-    const double stiffness = std::max(law.normal_stiffness_n_per_m(b.bond_radius_m),
-                                      law.shear_stiffness_n_per_m(b.bond_radius_m));
+    const double stiffness =
+        std::max(law.normal_stiffness_n_per_m(b), law.shear_stiffness_n_per_m(b));
     bond_stiffness[b.i] += stiffness;
     bond_stiffness[b.j] += stiffness;
   }

@@ -40,7 +40,10 @@ dem::FilletTemplate make_fillet_template(const dem::TriangleMesh* base, double r
   if (scale != 1.0) {
     for (auto& p : fillet.positions_m) p *= scale;
     for (auto& r : fillet.radii_m) r *= scale;
-    for (auto& b : fillet.bonds) b.contact_radius_m *= scale;
+    for (auto& b : fillet.bonds) {
+      b.contact_radius_m *= scale;
+      b.thickness_m *= scale;
+    }
     fillet.half_extent_m *= scale;
     fillet.mass_kg *= scale * scale * scale;
   }

@@ -5,12 +5,16 @@
 #include <atomic>
 #include <cmath>
 #include <exception>
+#include <limits>
+#include <memory>
 #include <mutex>
 #include <numbers>
 #include <stdexcept>
 #include <thread>
 
 #include "fl/twin/dem/config.hpp"
+#include "fl/twin/dem/laws.hpp"
+#include "fl/twin/dem/state.hpp"
 
 namespace fl::model_tests {
 
@@ -101,7 +105,7 @@ dem::FilletTemplate make_fillet(const CommonParams& common, double scale) {
 std::vector<dem::BodyBond> body_bonds(const dem::FilletTemplate& fillet) {
   std::vector<dem::BodyBond> bonds;
   bonds.reserve(fillet.bonds.size());
-  for (const auto& b : fillet.bonds) bonds.push_back({b.i, b.j, b.contact_radius_m});
+  for (const auto& b : fillet.bonds) bonds.push_back({b.i, b.j, b.contact_radius_m, b.thickness_m});
   return bonds;
 }
 
@@ -126,12 +130,20 @@ dem::FilletTemplate make_block(double radius_m, int nx, int ny, int nz) {
     }
   }
   const double contact_radius = radius_m * std::sqrt(3.0);  // the fillet raster's (3.3.1)
+  const double thickness = nz * pitch;                      // bottom to top of the spheres
   for (int z = 0; z < nz; ++z) {
     for (int y = 0; y < ny; ++y) {
       for (int x = 0; x < nx; ++x) {
-        if (x + 1 < nx) block.bonds.push_back({index(x, y, z), index(x + 1, y, z), contact_radius});
-        if (y + 1 < ny) block.bonds.push_back({index(x, y, z), index(x, y + 1, z), contact_radius});
-        if (z + 1 < nz) block.bonds.push_back({index(x, y, z), index(x, y, z + 1), contact_radius});
+        // A cut sample is as thick everywhere as it is high.
+        if (x + 1 < nx) {
+          block.bonds.push_back({index(x, y, z), index(x + 1, y, z), contact_radius, thickness});
+        }
+        if (y + 1 < ny) {
+          block.bonds.push_back({index(x, y, z), index(x, y + 1, z), contact_radius, thickness});
+        }
+        if (z + 1 < nz) {
+          block.bonds.push_back({index(x, y, z), index(x, y, z + 1), contact_radius, thickness});
+        }
       }
     }
   }
@@ -140,22 +152,37 @@ dem::FilletTemplate make_block(double radius_m, int nx, int ny, int nz) {
 }
 
 double bond_critical_step_s(const dem::ModelSpec& spec, const dem::FilletTemplate& fillet) {
-  std::vector<int> bond_count(fillet.positions_m.size(), 0);
-  for (const auto& b : fillet.bonds) {
-    ++bond_count[b.i];
-    ++bond_count[b.j];
+  // The bond law of the fillet types as the engine builds it, asked for each bond's spring
+  // constants: a graded law's differ from bond to bond, and every bpm variant counts.
+  const dem::InteractionSpec* bonded = nullptr;
+  for (const auto& interaction : spec.interactions) {
+    if (interaction.bond_law) {
+      bonded = &interaction;
+      break;
+    }
   }
-  const Stiffness s = spec_stiffness(spec);
-  const double disk = spec_disk_scale(spec);
-  const double density = spec.materials[spec.types[dem::kFilletTypeA].material].density_kg_per_m3;
   double step = std::numeric_limits<double>::infinity();
-  for (std::size_t k = 0; k < bond_count.size(); ++k) {
-    if (bond_count[k] == 0) continue;
+  if (bonded == nullptr) return step;
+  const dem::Material& material = spec.materials[spec.types[dem::kFilletTypeA].material];
+  const std::unique_ptr<dem::BondLaw> law = dem::LawRegistry::builtin().create_bond_law(
+      bonded->bond_law->name, bonded->bond_law->parameters,
+      dem::make_pair_material(material, material, false));
+  // Per sphere, the springs of all its bonds in parallel.
+  std::vector<double> stiffness_n_per_m(fillet.positions_m.size(), 0.0);
+  for (const auto& b : fillet.bonds) {
+    dem::Bond bond;
+    bond.bond_radius_m = std::min(fillet.radii_m[b.i], fillet.radii_m[b.j]);
+    bond.thickness_m = b.thickness_m;
+    const double k =
+        std::max(law->normal_stiffness_n_per_m(bond), law->shear_stiffness_n_per_m(bond));
+    stiffness_n_per_m[b.i] += k;
+    stiffness_n_per_m[b.j] += k;
+  }
+  for (std::size_t k = 0; k < stiffness_n_per_m.size(); ++k) {
+    if (stiffness_n_per_m[k] <= 0.0) continue;
     const double r = fillet.radii_m[k];
-    const double area = std::numbers::pi * disk * r * disk * r;
-    const double stiffness = std::max(s.normal_n_per_m3, s.shear_n_per_m3) * area;
-    const double mass = density * 4.0 / 3.0 * std::numbers::pi * r * r * r;
-    step = std::min(step, 2.0 / std::sqrt(bond_count[k] * stiffness / mass));
+    const double mass = material.density_kg_per_m3 * 4.0 / 3.0 * std::numbers::pi * r * r * r;
+    step = std::min(step, 2.0 / std::sqrt(stiffness_n_per_m[k] / mass));
   }
   return step;
 }

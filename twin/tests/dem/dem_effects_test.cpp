@@ -2,8 +2,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
 
 #include "dem_test_support.hpp"
+#include "fl/twin/dem/config.hpp"
 
 namespace fl::dem {
 namespace {
@@ -25,7 +29,7 @@ const double kArea = 3.14159265358979323846 * kRadius * kRadius;
 // A bond of rest length 8 mm driven through `distance(t)`; returns the normal force at the end.
 template <typename Distance>
 double drive_bond(const BondLaw& law, BondState& state, Distance distance, double from_s,
-                  double to_s, double dt) {
+                  double to_s, double dt, double thickness_m = 0.0) {
   BondForce force;
   for (double t = from_s; t < to_s - 0.5 * dt; t += dt) {
     BondGeometry g;
@@ -35,6 +39,7 @@ double drive_bond(const BondLaw& law, BondState& state, Distance distance, doubl
     g.rest_length_m = 0.008;
     g.bond_radius_m = kRadius;
     g.break_distance_m = 0.016;
+    g.thickness_m = thickness_m;
     g.timestep_s = dt;
     force = BondForce{};
     law.compute(g, state, force);
@@ -95,6 +100,93 @@ TEST(DemEffects, PlasticBondKeepsAPermanentSet) {
   BondState elastic_state;
   EXPECT_NEAR(drive_bond(*elastic, elastic_state, back, 1.0, 2.0, 1e-3),
               -2.0 * kStiffness * kArea * yield_stretch, 1e-12);
+}
+
+TEST(DemEffects, GradedBondStiffnessFollowsThePowerOfTheThickness) {
+  // k(t) = k (t / 20 mm)^1.5: a 10 mm thin tip at 0.354 k, the reference at k, a 40 mm rear
+  // at 2.83 k, in force, in the reported spring constant and in the stored energy.
+  constexpr double kReferenceM = 0.020;
+  constexpr double kExponent = 1.5;
+  auto law = LawRegistry::builtin().create_bond_law("bpm_graded",
+                                                    {{"normal_stiffness_n_per_m3", kStiffness},
+                                                     {"shear_stiffness_n_per_m3", kStiffness},
+                                                     {"reference_thickness_m", kReferenceM},
+                                                     {"thickness_exponent", kExponent}},
+                                                    fillet_material());
+  EXPECT_TRUE(law->needs_bond_thickness());
+  const double stretch = 1e-5;
+  const auto distance = [&](double t) { return 0.008 + stretch * std::min(t, 1.0); };
+  for (const double thickness_m : {0.010, 0.020, 0.040}) {
+    const double scale = std::pow(thickness_m / kReferenceM, kExponent);
+    BondState state;
+    EXPECT_NEAR(drive_bond(*law, state, distance, 0.0, 1.0, 1e-2, thickness_m),
+                -scale * kStiffness * kArea * stretch, 1e-12 * kStiffness * kArea * stretch)
+        << thickness_m;
+    Bond bond;
+    bond.bond_radius_m = kRadius;
+    bond.thickness_m = thickness_m;
+    EXPECT_NEAR(law->normal_stiffness_n_per_m(bond), scale * kStiffness * kArea, 1e-9);
+    EXPECT_NEAR(law->shear_stiffness_n_per_m(bond), scale * kStiffness * kArea, 1e-9);
+    const double force_n = scale * kStiffness * kArea * stretch;
+    EXPECT_NEAR(law->elastic_energy_j(state, bond),
+                force_n * force_n / (2.0 * scale * kStiffness * kArea), 1e-18);
+  }
+  // The plain bpm ignores a thickness.
+  auto plain = LawRegistry::builtin().create_bond_law(
+      "bpm", {{"normal_stiffness_n_per_m3", kStiffness}, {"shear_stiffness_n_per_m3", kStiffness}},
+      fillet_material());
+  EXPECT_FALSE(plain->needs_bond_thickness());
+  BondState plain_state;
+  EXPECT_NEAR(drive_bond(*plain, plain_state, distance, 0.0, 1.0, 1e-2, 0.040),
+              -kStiffness * kArea * stretch, 1e-12 * kStiffness * kArea * stretch);
+}
+
+// In the engine: a bonded pair at twice the reference thickness with exponent 2 has 4 times
+// the spring, so it oscillates twice as fast and the timestep check halves its bond step; a
+// body whose bonds carry no thickness is refused, naming the bond.
+TEST(DemEffects, GradedBondInTheEngineUsesEachBondsThickness) {
+  ModelSpec spec = test::ball_model({test::hertz(1.0)}, 1e-5, Vec3::Zero(), false);
+  spec.interactions[0].bond_law = LawSpec{"bpm_graded",
+                                          {{"normal_stiffness_n_per_m3", kStiffness},
+                                           {"shear_stiffness_n_per_m3", kStiffness},
+                                           {"reference_thickness_m", 0.010},
+                                           {"thickness_exponent", 2.0}}};
+  const auto model = std::make_shared<Model>(spec);
+  const std::vector<Vec3> positions = {Vec3(-kRadius, 0, 0), Vec3(kRadius, 0, 0)};
+  const std::vector<double> radii = {kRadius, kRadius};
+  const std::vector<std::uint8_t> types = {0, 0};
+  {
+    Simulation sim(model);
+    const std::vector<BodyBond> no_thickness = {{0, 1, kAppendixBContactRadiusM}};
+    try {
+      sim.add_body(positions, radii, types, no_thickness, BodyPose{});
+      ADD_FAILURE() << "a graded bond without a thickness was accepted";
+    } catch (const std::invalid_argument& error) {
+      EXPECT_NE(std::string(error.what()).find("bond 0-1"), std::string::npos) << error.what();
+      EXPECT_NE(std::string(error.what()).find("thickness"), std::string::npos) << error.what();
+    }
+  }
+  Simulation sim(model);
+  const std::vector<BodyBond> bonds = {{0, 1, kAppendixBContactRadiusM, 0.020}};
+  sim.add_body(positions, radii, types, bonds, BodyPose{});
+  const double k = 4.0 * kStiffness * kArea;
+  EXPECT_NEAR(sim.check_timestep().bond_critical_step_s, 2.0 / std::sqrt(k / test::sphere_mass()),
+              1e-12);
+  // Released from a small stretch speed, it passes back through its rest length after half
+  // a period of the stiffer spring: omega = sqrt(k / (m / 2)).
+  const double omega = std::sqrt(k / (test::sphere_mass() / 2.0));
+  sim.mutable_state().velocity_m_per_s[0] = Vec3(-1e-4, 0, 0);
+  sim.mutable_state().velocity_m_per_s[1] = Vec3(1e-4, 0, 0);
+  double previous = 0.0;
+  double crossed_s = -1.0;
+  while (sim.state().time_s < 2.0 * std::numbers::pi / omega && crossed_s < 0.0) {
+    sim.step();
+    const double stretch =
+        (sim.state().position_m[1] - sim.state().position_m[0]).norm() - 2.0 * kRadius;
+    if (previous > 0.0 && stretch <= 0.0) crossed_s = sim.state().time_s;
+    previous = stretch;
+  }
+  EXPECT_NEAR(crossed_s, std::numbers::pi / omega, 0.01 * std::numbers::pi / omega);
 }
 
 // ---------------------------------------------------------------- contacts, in the engine

@@ -20,6 +20,9 @@ inline constexpr std::uint8_t kFilletTypeB = 1;
 struct FilletBond {
   std::uint32_t i = 0, j = 0;
   double contact_radius_m = 0.0;
+  // The fillet's thickness where the bond sits: the mean of the two spheres' raster columns
+  // (top of the highest sphere to the bottom of the lowest). Graded bond laws scale with it.
+  double thickness_m = 0.0;
 };
 
 struct FilletTemplate {

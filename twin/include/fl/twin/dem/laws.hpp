@@ -6,8 +6,9 @@
 // pair's material (E*, G*).
 //
 // Adding an effect (visco-elastic bonds, plasticity, moisture-dependent friction, rolling
-// resistance, graded stiffness: the built-in ones are bpm_viscoelastic, bpm_plastic, wet_film,
-// rolling_resistance, static_kinetic_friction) is one class and one registration line:
+// resistance, graded stiffness: the built-in ones are bpm_viscoelastic, bpm_plastic,
+// bpm_graded, wet_film, rolling_resistance, static_kinetic_friction) is one class and one
+// registration line:
 //
 //   class SpeedWeakening final : public ContactLaw {          // 1. the class
 //    public:
@@ -138,6 +139,7 @@ struct BondGeometry {
   double rest_length_m = 0.0;                     // distance when the bond formed
   double bond_radius_m = 0.0;                     // smaller particle radius (before disk scale)
   double break_distance_m = 0.0;                  // sum of the two contact radii
+  double thickness_m = 0.0;                       // the body's local thickness; 0: not given
   Vec3 relative_velocity_m_per_s = Vec3::Zero();  // i's bond point relative to j's
   double timestep_s = 0.0;
 };
@@ -186,11 +188,13 @@ class BondLaw {
   // (one virtual call per run of bonds instead of one per bond, as a LAMMPS bond style).
   virtual bool compute_batch(const BondBatch& batch) const;
   // Elastic energy held in a bond's state (energy reports; kept out of the step loop).
-  [[nodiscard]] virtual double elastic_energy_j(const BondState& state,
-                                                double bond_radius_m) const = 0;
-  // Spring constants (N/m) of a bond of this radius, for the timestep check.
-  [[nodiscard]] virtual double normal_stiffness_n_per_m(double bond_radius_m) const = 0;
-  [[nodiscard]] virtual double shear_stiffness_n_per_m(double bond_radius_m) const = 0;
+  [[nodiscard]] virtual double elastic_energy_j(const BondState& state, const Bond& bond) const = 0;
+  // Spring constants (N/m) of this bond, for the timestep check.
+  [[nodiscard]] virtual double normal_stiffness_n_per_m(const Bond& bond) const = 0;
+  [[nodiscard]] virtual double shear_stiffness_n_per_m(const Bond& bond) const = 0;
+  // Whether the law reads each bond's thickness_m (graded stiffness): the engine then refuses
+  // bonds added without one rather than guess.
+  [[nodiscard]] virtual bool needs_bond_thickness() const { return false; }
 };
 
 // A parameter a law accepts, with its allowed closed range and optional default.

@@ -39,6 +39,7 @@ struct BodyBond {
   std::uint32_t i = 0;
   std::uint32_t j = 0;
   double contact_radius_m = 0.0;
+  double thickness_m = 0.0;  // the body's local thickness there; 0: not given
 };
 
 struct BodyPose {

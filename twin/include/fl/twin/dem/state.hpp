@@ -17,6 +17,7 @@ struct Bond {
   double rest_length_m = 0.0;
   double bond_radius_m = 0.0;     // smaller particle radius; the law applies the disk scale
   double break_distance_m = 0.0;  // sum of both contact radii
+  double thickness_m = 0.0;       // the body's local thickness at the bond; 0: not given
 };
 
 // Kinematics of one wall: a rigid motion of its geometry about `pivot_m` plus a surface
