@@ -442,7 +442,7 @@ std::vector<std::filesystem::path> write_sensitivity_plots(const Calibration& ca
     }
     if (!design.x.empty()) plot.series.push_back(std::move(design));
     report::Series main_effect;
-    main_effect.label = "main effect (mean per slice)";
+    main_effect.label = "main effect";
     main_effect.style = report::SeriesStyle::kLineAndMarkers;
     for (std::size_t slice = 0; slice < s.main_effect_rmse.size(); ++slice) {
       if (!std::isfinite(s.main_effect_rmse[slice])) continue;
@@ -451,7 +451,7 @@ std::vector<std::filesystem::path> write_sensitivity_plots(const Calibration& ca
     }
     if (!main_effect.x.empty()) plot.series.push_back(std::move(main_effect));
     report::Series local;
-    local.label = "moved a tenth of the box";
+    local.label = "moved 1/10 of box";
     local.style = report::SeriesStyle::kLineAndMarkers;
     const std::array<std::pair<double, double>, 3> around{{{s.value_down, s.rmse_down},
                                                            {calibration.best[p], calibration.rmse},
