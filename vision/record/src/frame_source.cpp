@@ -9,6 +9,8 @@
 #include <opencv2/videoio.hpp>
 #include <stdexcept>
 
+#include "fl/vision/record/recording.hpp"
+
 namespace fl::vision::record {
 namespace {
 
@@ -52,7 +54,10 @@ DirectoryFrameSource::DirectoryFrameSource(const std::filesystem::path& director
 
 std::optional<SourceFrame> DirectoryFrameSource::next() {
   if (next_ >= files_.size()) return std::nullopt;
-  const std::filesystem::path& file = files_[next_];
+  // Past this file before reading it: after an unreadable file the caller may go on with
+  // the next one (the camera node does), and the gap stays in the sequence and the time.
+  const std::size_t index = next_++;
+  const std::filesystem::path& file = files_[index];
   // IMREAD_UNCHANGED keeps a 16-bit file 16-bit, so that it is refused below instead of
   // being scaled silently.
   cv::Mat image = cv::imread(file.string(), cv::IMREAD_UNCHANGED);
@@ -62,10 +67,9 @@ std::optional<SourceFrame> DirectoryFrameSource::next() {
   }
   SourceFrame frame;
   frame.bgr = to_bgr(image);
-  frame.sequence = static_cast<std::uint32_t>(next_);
-  frame.time_ns = static_cast<std::int64_t>(next_) * period_ns_;
+  frame.sequence = static_cast<std::uint32_t>(index);
+  frame.time_ns = static_cast<std::int64_t>(index) * period_ns_;
   frame.origin = file.filename().string();
-  ++next_;
   return frame;
 }
 
@@ -128,5 +132,55 @@ std::optional<SourceFrame> VideoCaptureFrameSource::next() {
   ++sequence_;
   return frame;
 }
+
+// ------------------------------------------------------------------ recording
+
+RecordingFrameSource::RecordingFrameSource(const std::filesystem::path& recording, CameraId camera)
+    : camera_(std::make_unique<RecordedCamera>()) {
+  Recording loaded = load_recording(recording);
+  *camera_ = std::move(loaded.cameras[static_cast<std::size_t>(camera)]);
+  if (camera_->frames.empty()) {
+    throw RecordingError(recording.string() + ": no frames of camera " +
+                         std::string(camera_name(camera)));
+  }
+  first_exposure_ns_ = camera_->frames.begin()->second.exposure_ns;
+  std::vector<std::int64_t> spacing_ns;
+  std::int64_t previous_ns = first_exposure_ns_;
+  for (auto it = std::next(camera_->frames.begin()); it != camera_->frames.end(); ++it) {
+    spacing_ns.push_back(it->second.exposure_ns - previous_ns);
+    previous_ns = it->second.exposure_ns;
+  }
+  if (!spacing_ns.empty()) {
+    const auto middle =
+        spacing_ns.begin() + static_cast<std::ptrdiff_t>((spacing_ns.size() - 1) / 2);
+    std::nth_element(spacing_ns.begin(), middle, spacing_ns.end());
+    median_period_ns_ = *middle;
+  }
+  description_ = "recording " + recording.string() + " (camera " +
+                 std::string(camera_name(camera)) + ", " + std::to_string(camera_->frames.size()) +
+                 " frames)";
+}
+
+RecordingFrameSource::~RecordingFrameSource() = default;
+
+std::optional<SourceFrame> RecordingFrameSource::next() {
+  const auto found = camera_->frames.lower_bound(next_sequence_);
+  if (found == camera_->frames.end()) return std::nullopt;
+  const RecordedFrame& recorded = found->second;
+  next_sequence_ = recorded.sequence + 1;
+  SourceFrame frame;
+  frame.bgr = decode_frame(recorded);
+  // Recorded sequences count from 1 (0 is "no frame yet" on the wire).
+  frame.sequence = recorded.sequence > 0 ? recorded.sequence - 1 : 0;
+  frame.time_ns = recorded.exposure_ns - first_exposure_ns_;
+  frame.origin = recorded.where;
+  return frame;
+}
+
+const std::optional<BeltCalibration>& RecordingFrameSource::calibration() const {
+  return camera_->calibration;
+}
+
+std::size_t RecordingFrameSource::size() const { return camera_->frames.size(); }
 
 }  // namespace fl::vision::record

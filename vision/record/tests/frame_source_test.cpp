@@ -9,7 +9,9 @@
 #include <opencv2/videoio.hpp>
 
 #include "fl/vision/fillet_estimator.hpp"
+#include "fl/vision/record/recording.hpp"
 #include "fl/vision/record/twin_frame_source.hpp"
+#include "record_test_support.hpp"
 
 namespace fl::vision::record {
 namespace {
@@ -85,14 +87,65 @@ TEST(DirectoryFrameSource, BadInputNamesTheFile) {
   const auto dir = fresh_directory("bad");
   EXPECT_THROW(DirectoryFrameSource(dir, 1), std::runtime_error);  // no images
   EXPECT_THROW(DirectoryFrameSource(dir / "missing", 1), std::runtime_error);
-  std::ofstream(dir / "broken.png") << "not a PNG at all";
-  DirectoryFrameSource source(dir, 1);
+  std::ofstream(dir / "a_broken.png") << "not a PNG at all";
+  cv::imwrite((dir / "b_good.png").string(), test_frame(1));
+  const std::int64_t period_ns = 40'000'000;  // 25 Hz
+  DirectoryFrameSource source(dir, period_ns);
   try {
     (void)source.next();
     FAIL() << "a corrupt image was read";
   } catch (const std::runtime_error& error) {
-    EXPECT_NE(std::string(error.what()).find("broken.png"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("a_broken.png"), std::string::npos) << error.what();
   }
+  // The caller may go on past the broken file; its slot stays a gap in sequence and time.
+  const auto after = source.next();
+  ASSERT_TRUE(after.has_value());
+  EXPECT_EQ(after->sequence, 1U);
+  EXPECT_EQ(after->time_ns, period_ns);
+  EXPECT_TRUE(identical(after->bgr, test_frame(1)));
+  EXPECT_FALSE(source.next().has_value());
+  std::filesystem::remove_all(dir);
+}
+
+TEST(RecordingFrameSource, ServesOneCamerasFramesBitExactWithTheirGaps) {
+  const auto dir = fresh_directory("recording");
+  const auto path = dir / "rec.mcap";
+  // Recorded sequences 1, 2, 3 and 5 (4 lost by the recorder) at 25 Hz from exposure 5 s.
+  const std::int64_t first_exposure_ns = 5'000'000'000;
+  const std::int64_t period_ns = 40'000'000;
+  {
+    RecordingWriter writer(path, {9, {{"source", "test"}}});
+    writer.add_camera(CameraId::kOrientation, test::small_calibration());
+    writer.add_camera(CameraId::kFinal, test::small_calibration());
+    for (std::uint32_t sequence : {1U, 2U, 3U, 5U}) {
+      writer.write_frame(CameraId::kOrientation, sequence,
+                         first_exposure_ns + (sequence - 1) * period_ns,
+                         test_frame(static_cast<int>(sequence)));
+    }
+    writer.write_frame(CameraId::kFinal, 1, first_exposure_ns, test_frame(0));
+    writer.close();
+  }
+  RecordingFrameSource source(path, CameraId::kOrientation);
+  EXPECT_EQ(source.size(), 4U);
+  EXPECT_EQ(source.median_period_ns(), period_ns);  // spacings 1, 1 and 2 periods
+  ASSERT_TRUE(source.calibration().has_value());
+  EXPECT_EQ(source.calibration()->image_width_px, test::small_calibration().image_width_px);
+  for (std::uint32_t sequence : {1U, 2U, 3U, 5U}) {
+    const auto frame = source.next();
+    ASSERT_TRUE(frame.has_value()) << "sequence " << sequence;
+    EXPECT_EQ(frame->sequence, sequence - 1);  // the source's count is from 0
+    EXPECT_EQ(frame->time_ns, (sequence - 1) * period_ns);
+    EXPECT_TRUE(identical(frame->bgr, test_frame(static_cast<int>(sequence))));
+  }
+  EXPECT_FALSE(source.next().has_value());
+  // A camera without frames in the file, and a file that is not there, are refused by name.
+  try {
+    RecordingFrameSource none(path, CameraId::kPosition);
+    FAIL() << "a camera without frames was served";
+  } catch (const RecordingError& error) {
+    EXPECT_NE(std::string(error.what()).find("position"), std::string::npos) << error.what();
+  }
+  EXPECT_THROW(RecordingFrameSource(dir / "missing.mcap", CameraId::kOrientation), RecordingError);
   std::filesystem::remove_all(dir);
 }
 

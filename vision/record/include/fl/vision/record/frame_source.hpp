@@ -1,6 +1,7 @@
 // Where recorded frames come from: the twin's renderer (twin_frame_source.hpp, a separate
 // library so that this one does not link the twin), OpenCV VideoCapture (a video file or a
-// camera device on the line PC) and a directory of still images.
+// camera device on the line PC), a directory of still images, and one camera's frames in an
+// MCAP recording (to serve yesterday's frames again, as the camera node does in tests).
 #pragma once
 
 #include <chrono>
@@ -12,12 +13,17 @@
 #include <string>
 #include <vector>
 
+#include "fl/controller/process_image.hpp"
+#include "fl/vision/calibration.hpp"
+
 namespace fl::vision::record {
+
+struct RecordedCamera;
 
 struct SourceFrame {
   cv::Mat bgr;  // CV_8UC3
   std::int64_t time_ns = 0;
-  std::uint32_t sequence = 0;  // +1 per frame from 0
+  std::uint32_t sequence = 0;  // the source's frame number from 0: +1 per frame it delivered
   std::string origin;          // file name, device frame number, ...
 };
 
@@ -62,6 +68,8 @@ class VideoCaptureFrameSource final : public FrameSource {
   ~VideoCaptureFrameSource() override;
   std::optional<SourceFrame> next() override;
   [[nodiscard]] std::string describe() const override { return description_; }
+  // A file's frame spacing (its frame rate, or the fallback); 0 for a device.
+  [[nodiscard]] std::int64_t period_ns() const { return period_ns_; }
 
  private:
   struct Capture;
@@ -71,6 +79,30 @@ class VideoCaptureFrameSource final : public FrameSource {
   std::int64_t period_ns_ = 0;
   std::uint32_t sequence_ = 0;
   std::chrono::steady_clock::time_point first_{};
+};
+
+// One camera's frames in a recording (recording.hpp), in sequence order, stamped with their
+// exposure relative to the first frame's; `sequence` is the recorded one less 1, so a frame
+// the recorder lost stays a gap. Throws RecordingError when the file is unusable or has no
+// frames of this camera, and (from next()) naming the frame when one does not decode.
+class RecordingFrameSource final : public FrameSource {
+ public:
+  RecordingFrameSource(const std::filesystem::path& recording, CameraId camera);
+  ~RecordingFrameSource() override;
+  std::optional<SourceFrame> next() override;
+  [[nodiscard]] std::string describe() const override { return description_; }
+  // The belt calibration the frames were recorded with (the recording's attachment).
+  [[nodiscard]] const std::optional<BeltCalibration>& calibration() const;
+  [[nodiscard]] std::size_t size() const;
+  // The median spacing of consecutive recorded frames (0 with a single frame).
+  [[nodiscard]] std::int64_t median_period_ns() const { return median_period_ns_; }
+
+ private:
+  std::unique_ptr<RecordedCamera> camera_;
+  std::int64_t median_period_ns_ = 0;
+  std::string description_;
+  std::uint32_t next_sequence_ = 0;  // the recorded sequence to deliver next (or the one after)
+  std::int64_t first_exposure_ns_ = 0;
 };
 
 }  // namespace fl::vision::record
