@@ -108,4 +108,11 @@ void LedgerWriter::flush() {
   if (file_.is_open()) file_.flush();
 }
 
+nlohmann::json summary_json(const DistributionSummary& summary) {
+  return {{"count", summary.count},
+          {"p50", static_cast<double>(summary.p50_ns) / 1e3},
+          {"p99", static_cast<double>(summary.p99_ns) / 1e3},
+          {"max", static_cast<double>(summary.max_ns) / 1e3}};
+}
+
 }  // namespace fl::apps

@@ -5,10 +5,12 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "fl/controller/cycle_stats.hpp"
 #include "fl/controller/ledger.hpp"
 #include "fl/controller/line_config.hpp"
 #include "fl/controller/plant.hpp"
@@ -59,5 +61,8 @@ class LedgerWriter {
  private:
   std::ofstream file_;
 };
+
+// A latency distribution for the JSON reports: count, and p50, p99 and max in microseconds.
+nlohmann::json summary_json(const DistributionSummary& summary);
 
 }  // namespace fl::apps

@@ -56,13 +56,6 @@ void log_control_event(const Event& event) {
   }
 }
 
-nlohmann::json summary_json(const DistributionSummary& s) {
-  return {{"count", s.count},
-          {"p50", static_cast<double>(s.p50_ns) / 1e3},
-          {"p99", static_cast<double>(s.p99_ns) / 1e3},
-          {"max", static_cast<double>(s.max_ns) / 1e3}};
-}
-
 }  // namespace
 
 CLI::App* add_control_subcommand(CLI::App& app, ControlArgs& args) {

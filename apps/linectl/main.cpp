@@ -9,6 +9,8 @@
 //   (record_replay.hpp)
 //   linectl twin serve / control    the twin and the controller as two processes over DDS
 //   (two_process.hpp)
+//   linectl camera serve            the estimator as a camera node on DDS
+//   (camera_node_command.hpp)
 #include <spdlog/spdlog.h>
 
 #include <CLI/CLI.hpp>
@@ -21,6 +23,7 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 
+#include "camera_node_command.hpp"
 #include "cli_support.hpp"
 #include "compare_command.hpp"
 #include "dem_output.hpp"
@@ -221,6 +224,8 @@ int main(int argc, char** argv) {
   CLI::App* twin_serve = add_twin_subcommand(app, twin_args);
   ControlArgs control_args;
   CLI::App* control = add_control_subcommand(app, control_args);
+  CameraServeArgs camera_args;
+  CLI::App* camera_serve = add_camera_subcommand(app, camera_args);
   CompareArgs compare_args;
   CLI::App* compare = add_compare_subcommand(app, compare_args);
   CompareArgs diagnose_args;
@@ -250,6 +255,7 @@ int main(int argc, char** argv) {
     if (replay->parsed()) return replay_command(replay_args);
     if (twin_serve->parsed()) return twin_serve_command(twin_args);
     if (control->parsed()) return control_command(control_args);
+    if (camera_serve->parsed()) return camera_serve_command(camera_args);
     if (compare->parsed()) return compare_command(compare_args);
     if (diagnose->parsed()) return diagnose_command(diagnose_args);
     if (calibrate->parsed()) return calibrate_command(calibrate_args);

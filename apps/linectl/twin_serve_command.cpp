@@ -63,13 +63,6 @@ bool any_drive_enabled(const OutputImage& out) {
   return false;
 }
 
-nlohmann::json summary_json(const DistributionSummary& s) {
-  return {{"count", s.count},
-          {"p50", static_cast<double>(s.p50_ns) / 1e3},
-          {"p99", static_cast<double>(s.p99_ns) / 1e3},
-          {"max", static_cast<double>(s.max_ns) / 1e3}};
-}
-
 struct TwinStats {
   std::uint64_t ticks = 0;
   std::uint64_t late_ticks = 0;     // woke more than a period after their scheduled time
