@@ -8,42 +8,16 @@
 #include <limits>
 
 #include "fl/controller/config_loader.hpp"
+#include "line_signals.hpp"
 
 namespace fl::drivers {
 
 using canopen::NmtState;
 using canopen::NodeId;
 using canopen::SdoAddress;
+using namespace line_signals;  // NOLINT(google-build-using-namespace): the channel table
 
 namespace {
-
-// Signals on the I/O modules' channels (config/can.yaml documents the same table).
-namespace infeed_io {
-constexpr std::uint8_t kBeamBrokenBit = 0x01;
-constexpr std::uint8_t kLevellerOverloadBit = 0x02;
-constexpr std::size_t kLevelChannel = 0;
-constexpr std::size_t kHopperOpeningChannel = 1;
-constexpr std::size_t kLevellerSpeedChannel = 2;
-}  // namespace infeed_io
-namespace stations_io {
-constexpr std::uint8_t kPlate1FlippingBit = 0x01;
-constexpr std::uint8_t kPlate2FlippingBit = 0x02;
-constexpr std::uint8_t kSqueezeDownBit = 0x04;
-constexpr std::size_t kCentringPositionChannel = 0;
-constexpr std::uint8_t kPlate1FlipOut = 0x01;
-constexpr std::uint8_t kPlate2FlipOut = 0x02;
-constexpr std::uint8_t kCentringStrokeOut = 0x04;
-constexpr std::uint8_t kSqueezeDownOut = 0x08;
-constexpr std::uint8_t kFinalRejectOut = 0x10;
-}  // namespace stations_io
-namespace safety_io {
-constexpr std::uint8_t kEstopChainClosedBit = 0x01;
-constexpr std::uint8_t kStartBit = 0x02;
-constexpr std::uint8_t kStopBit = 0x04;
-constexpr std::uint8_t kFaultResetBit = 0x08;
-constexpr std::uint8_t kRunningLampOut = 0x01;
-constexpr std::uint8_t kFaultLampOut = 0x02;
-}  // namespace safety_io
 
 constexpr std::uint8_t kSynchronous = 1;    // PDO transmission type: every SYNC
 constexpr std::uint8_t kEventDriven = 255;  // RPDO: applied on receipt
@@ -51,17 +25,6 @@ constexpr std::uint16_t kProfileVelocityMode = 3;
 constexpr std::uint32_t kDeviceProfileMask = 0xFFFF;  // 0x1000 low word: the CiA profile
 constexpr std::uint32_t kDriveProfile = 402;
 constexpr std::uint32_t kIoProfile = 401;
-
-std::int16_t to_analog_counts(float value, float units_per_count) {
-  // A NaN command has no count; the output's zero is its safe value (found by fuzzing: the
-  // conversion of NaN to an integer is undefined behaviour).
-  if (std::isnan(value)) {
-    return 0;
-  }
-  const double counts =
-      std::round(static_cast<double>(value) / static_cast<double>(units_per_count));
-  return static_cast<std::int16_t>(std::clamp(counts, -32768.0, 32767.0));
-}
 
 std::string hex(std::uint32_t value, int digits) {
   char text[16];
