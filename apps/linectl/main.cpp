@@ -33,6 +33,8 @@
 #include "fl/controller/line_controller.hpp"
 #include "fl/controller/runtime.hpp"
 #include "fl/controller/yaml_reader.hpp"
+#include "fl/drivers/can_config.hpp"
+#include "fl/drivers/line_devices.hpp"
 #include "fl/twin/dem_plant/dem_plant.hpp"
 #include "fl/twin/fast_plant.hpp"
 #include "fl/twin/fast_plant_config.hpp"
@@ -64,7 +66,9 @@ struct RunArgs {
   std::string vtk_directory;  // --plant dem: ParaView series
   std::string video_file;     // --plant dem: top and side view video
   double frame_every_s = 0.04;
-  std::string hmi_config;  // --realtime: serve the operator HMI with this config
+  std::string hmi_config;         // --realtime: serve the operator HMI with this config
+  std::string fieldbus = "none";  // canopen: the plant behind the line's CANopen network
+  std::string can_config;         // default can.yaml from the configuration search path
 };
 
 int run_command(const RunArgs& args) {
@@ -88,7 +92,18 @@ int run_command(const RunArgs& args) {
   const std::filesystem::path config =
       args.config.empty() ? default_config("line.yaml") : std::filesystem::path(args.config);
   const LineConfig line = load_line_config(config);
-  std::unique_ptr<Plant> plant = make_plant(args.plant, args.plant_config, line);
+  std::unique_ptr<Plant> inner_plant = make_plant(args.plant, args.plant_config, line);
+  // --fieldbus canopen: every drive and I/O signal through the CANopen master and the
+  // plant-backed emulated devices on an in-process bus (fl/drivers/line_devices.hpp).
+  std::unique_ptr<fl::drivers::CanopenPlant> canopen_plant;
+  Plant* plant = inner_plant.get();
+  if (args.fieldbus == "canopen") {
+    const std::filesystem::path can_file = config_or_default(args.can_config, "can.yaml");
+    canopen_plant = std::make_unique<fl::drivers::CanopenPlant>(
+        *inner_plant, fl::drivers::load_can_config(can_file, line));
+    plant = canopen_plant.get();
+    spdlog::info("drives and I/O over CANopen ({}), on an in-process bus", can_file.string());
+  }
   spdlog::info("closed loop against the {} plant, feeding {}, seed {}, config {}", plant->name(),
                std::isfinite(*duration_s) ? fmt::format("for {} s", *duration_s) : "until stopped",
                args.seed, config.string());
@@ -116,7 +131,7 @@ int run_command(const RunArgs& args) {
     options.on_record = [&](const FilletRecord& record) { ledger.write(record); };
     std::unique_ptr<DemRunOutput> output;
     if (!args.vtk_directory.empty() || !args.video_file.empty()) {
-      const auto* dem = dynamic_cast<const DemPlant*>(plant.get());
+      const auto* dem = dynamic_cast<const DemPlant*>(inner_plant.get());
       if (dem == nullptr) {
         spdlog::error("--vtk and --video need --plant dem");
         return 2;
@@ -198,6 +213,12 @@ int main(int argc, char** argv) {
   run->add_option("--frame-every", run_args.frame_every_s,
                   "seconds of line time between --vtk/--video frames")
       ->check(CLI::Range(1e-3, 10.0));
+  run->add_option("--fieldbus", run_args.fieldbus,
+                  "none, or canopen: drives and I/O through the CANopen master and the "
+                  "plant-backed emulated devices")
+      ->check(CLI::IsMember({"none", "canopen"}));
+  run->add_option("--can-config", run_args.can_config,
+                  "--fieldbus canopen: the bus configuration (default can.yaml)");
   run->add_option("--hmi", run_args.hmi_config,
                   "--realtime: serve the operator HMI with this config (e.g. config/hmi.yaml)");
 
