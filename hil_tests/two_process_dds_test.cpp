@@ -17,6 +17,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 #include <vector>
 
 extern char** environ;
@@ -43,17 +44,31 @@ constexpr const char* kTwinFifo = "49";
 constexpr double kInSpecTolerance = 0.01;
 constexpr double kThroughputTolerance = 0.05;
 
-pid_t spawn(const std::vector<std::string>& args, const fs::path& log) {
+// `environment`: NAME=VALUE entries that replace the inherited ones of the same name (the
+// secured run gives each process its own CYCLONEDDS_URI).
+pid_t spawn(const std::vector<std::string>& args, const fs::path& log,
+            const std::vector<std::string>& environment = {}) {
   std::vector<char*> argv;
   for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
   argv.push_back(nullptr);
+  std::vector<char*> envp;
+  for (char** entry = environ; *entry != nullptr; ++entry) {
+    const std::string_view inherited(*entry);
+    const bool replaced = std::any_of(environment.begin(), environment.end(), [&](const auto& e) {
+      const std::size_t name_end = e.find('=');
+      return inherited.substr(0, name_end + 1) == std::string_view(e).substr(0, name_end + 1);
+    });
+    if (!replaced) envp.push_back(*entry);
+  }
+  for (const std::string& entry : environment) envp.push_back(const_cast<char*>(entry.c_str()));
+  envp.push_back(nullptr);
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
                                    O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
   pid_t pid = -1;
-  const int error = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  const int error = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
   posix_spawn_file_actions_destroy(&actions);
   EXPECT_EQ(error, 0) << "posix_spawn " << args[0];
   return error == 0 ? pid : -1;
@@ -194,6 +209,19 @@ TEST(TwoProcessDds, ControlAndTwinOverLoopbackMatchTheInProcessRun) {
       twin_kpis["twin"]["command_transport_us"]["p99"].get<double>());
 }
 
+// A copy of config/line.yaml whose overrun fault needs 50 overruns in a row (half a second)
+// instead of 3. For the tests that are about something other than the scan's timing: a
+// loaded CI machine can stall both processes for 30 ms, three overruns in a row, which faults
+// the line (seen once). The 200 ms sensor timeout still fires first when the twin dies.
+void write_tolerant_line_config(const fs::path& file) {
+  std::string line_config = text(FL_LINE_CONFIG);
+  const std::string strict = "overrun_fault_cycles: 3";
+  const std::size_t at = line_config.find(strict);
+  EXPECT_NE(at, std::string::npos) << FL_LINE_CONFIG << " no longer has " << strict;
+  if (at != std::string::npos) line_config.replace(at, strict.size(), "overrun_fault_cycles: 50");
+  std::ofstream(file) << line_config;
+}
+
 // One side of a two-process run dies mid-run (SIGKILL: no goodbye on the bus). Each process
 // must see it within its stale limit and take its safe reaction on its own.
 struct PeerLossRun {
@@ -210,16 +238,7 @@ PeerLossRun run_and_kill(const std::string& name, const std::string& domain, boo
   fs::create_directories(dir);
   // 30 s of feeding that is never reached: the kill comes after about 6 s of it.
   const std::string duration = "30s";
-  // These tests are about the peer's loss, not the scan's timing: a loaded CI machine can
-  // stall both processes for 30 ms, three overruns in a row, which faults the line before the
-  // kill (seen once). The copy of line.yaml tolerates 50 (half a second); the 200 ms sensor
-  // timeout still fires first when the twin dies.
-  std::string line_config = text(FL_LINE_CONFIG);
-  const std::string strict = "overrun_fault_cycles: 3";
-  const std::size_t at = line_config.find(strict);
-  EXPECT_NE(at, std::string::npos) << FL_LINE_CONFIG << " no longer has " << strict;
-  if (at != std::string::npos) line_config.replace(at, strict.size(), "overrun_fault_cycles: 50");
-  std::ofstream(dir / "line.yaml") << line_config;
+  write_tolerant_line_config(dir / "line.yaml");
   const pid_t control =
       spawn({FL_LINECTL, "control", "--duration", duration, "--domain", domain, "--fifo",
              kControlFifo, "--config", (dir / "line.yaml").string(), "--json",
@@ -275,6 +294,67 @@ TEST(TwoProcessDds, TwinStopsTheBeltsWhenTheControllerDies) {
   EXPECT_LT(run.twin["simulated_s"].get<double>(), 20.0);
   EXPECT_TRUE(run.twin["truth"]["balanced"].get<bool>());  // every fillet fed is accounted for
   EXPECT_GT(run.twin["truth"]["on_line_at_end"].get<int>(), 0);  // stopped, not emptied
+}
+
+// The two-process mode on a secured domain (DDS Security: authentication, access control,
+// encryption; docs/dds.md): the controller and the twin each with its own identity run and
+// balance their books, and the camera identity, allowed to publish estimates only, cannot
+// stand in for the line's devices.
+TEST(TwoProcessDds, SecuredControlAndTwinRunAndACameraCannotPoseAsTheLine) {
+  ASSERT_NE(std::getenv("CYCLONEDDS_URI"), nullptr) << "run through ctest";
+  const fs::path dir = fs::path(FL_TEST_WORK_DIR) / "secured";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path security = dir / "security";
+  const std::string make_security = std::string("bash ") + FL_DDS_SECURITY_SCRIPT + " " +
+                                    security.string() + " > " + (dir / "security.log").string() +
+                                    " 2>&1";
+  const int made = std::system(make_security.c_str());
+  if (WIFEXITED(made) && WEXITSTATUS(made) == 77) {
+    GTEST_SKIP() << "openssl or Cyclone's security plugins missing: " << text(dir / "security.log");
+  }
+  ASSERT_EQ(made, 0) << text(dir / "security.log");
+  const auto identity = [&](const char* role) {
+    return "CYCLONEDDS_URI=file://" +
+           (security / ("cyclonedds-" + std::string(role) + ".xml")).string();
+  };
+  write_tolerant_line_config(dir / "line.yaml");
+  // 15 s of feeding: some 15 fillets through every station, enough to show commands,
+  // sensors, feedback and estimates all flow under encryption.
+  const std::string duration = "15s";
+  const std::string domain = "56";
+  const pid_t control =
+      spawn({FL_LINECTL, "control", "--duration", duration, "--domain", domain, "--config",
+             (dir / "line.yaml").string(), "--json", (dir / "control.json").string()},
+            dir / "control.log", {identity("controller")});
+  const pid_t twin =
+      spawn({FL_LINECTL, "twin", "serve", "--plant", "fast", "--seed", "1", "--duration", duration,
+             "--domain", domain, "--json", (dir / "twin.json").string()},
+            dir / "twin.log", {identity("twin")});
+  const int twin_exit = wait_exit(twin);
+  const int control_exit = wait_exit(control);
+  const std::string logs =
+      "control:\n" + text(dir / "control.log") + "\ntwin:\n" + text(dir / "twin.log");
+  ASSERT_EQ(twin_exit, 0) << logs;
+  ASSERT_EQ(control_exit, 0) << logs;
+  const nlohmann::json twin_kpis = load(dir / "twin.json");
+  const nlohmann::json control_kpis = load(dir / "control.json");
+  SCOPED_TRACE("twin: " + twin_kpis.dump() + "\ncontrol: " + control_kpis.dump());
+  EXPECT_TRUE(twin_kpis["truth"]["balanced"].get<bool>());
+  EXPECT_GT(twin_kpis["truth"]["outfeed"].get<int>(), 0);  // fillets went all the way through
+  EXPECT_TRUE(control_kpis["ledger"]["balanced"].get<bool>());
+  EXPECT_EQ(control_kpis["runtime"]["fault"].get<std::string>(), "none");
+  EXPECT_GT(control_kpis["dds"]["estimate_to_command_us"]["count"].get<int>(), 0);
+
+  // The camera's identity may publish estimates but not sensors or drive feedback, and may
+  // not read commands: Cyclone's access control refuses the twin's topics at creation.
+  const pid_t impostor = spawn({FL_LINECTL, "twin", "serve", "--plant", "fast", "--duration", "5s",
+                                "--domain", domain, "--wait", "2s"},
+                               dir / "impostor.log", {identity("camera")});
+  const int impostor_exit = wait_exit(impostor);
+  const std::string impostor_log = text(dir / "impostor.log");
+  EXPECT_NE(impostor_exit, 0) << impostor_log;
+  EXPECT_NE(impostor_log.find("Not Allowed By Security"), std::string::npos) << impostor_log;
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Generates a DDS Security setup for the line into OUT_DIR: a CA (identity and permissions
-# CA in one), one identity certificate and key per role (camera, controller, hmi,
+# CA in one), one identity certificate and key per role (camera, controller, twin, hmi,
 # intruder), the signed governance and permissions documents of config/dds/, and one
 # Cyclone configuration per role (cyclonedds-<role>.xml) from the secure template.
 # Adapted from ../shared/recipes/dds/sec-gen.sh. For tests and development: on a plant the
@@ -32,7 +32,7 @@ cd "$out_dir"
 openssl ecparam -name prime256v1 -genkey -noout -out ca_key.pem
 openssl req -x509 -new -key ca_key.pem -sha256 -days 3650 \
   -subj "/C=NL/O=FilletLine/CN=FilletLineCA" -out ca_cert.pem
-for role in camera controller hmi intruder; do
+for role in camera controller twin hmi intruder; do
   openssl ecparam -name prime256v1 -genkey -noout -out "${role}_key.pem"
   openssl req -new -key "${role}_key.pem" -subj "/C=NL/O=FilletLine/CN=$role" -out "$role.csr"
   openssl x509 -req -in "$role.csr" -CA ca_cert.pem -CAkey ca_key.pem -CAcreateserial \
@@ -44,4 +44,4 @@ openssl smime -sign -in "$config_dir/governance.xml" -text -out governance.p7s \
   -signer ca_cert.pem -inkey ca_key.pem
 openssl smime -sign -in "$config_dir/permissions.xml" -text -out permissions.p7s \
   -signer ca_cert.pem -inkey ca_key.pem
-echo "make_security.sh: wrote CA, identities (camera controller hmi intruder) to $out_dir"
+echo "make_security.sh: wrote CA, identities (camera controller twin hmi intruder) to $out_dir"
