@@ -293,6 +293,9 @@ TEST_F(CameraNode, RefusesWhatItCannotServeAndSaysWhy) {
   const fs::path dir = fresh_dir("refusals");
   const fs::path not_mcap = dir / "not_a_recording.mcap";
   std::ofstream(not_mcap) << "plain text, not MCAP";
+  const fs::path images = dir / "images";  // one image: only the calibration is missing
+  fs::create_directories(images);
+  cv::imwrite((images / "000.png").string(), cv::Mat(240, 320, CV_8UC3, cv::Scalar(165, 105, 35)));
   const std::string linectl = FL_LINECTL;
   const std::string calibration = (fs::path(FL_SOURCE_DIR) / "config/camera_orientation.yaml");
   struct Case {
@@ -304,6 +307,7 @@ TEST_F(CameraNode, RefusesWhatItCannotServeAndSaysWhy) {
       {{"--recording", recording_path().string(), "--images", dir.string()}, 2, "exactly one"},
       {{"--recording", not_mcap.string()}, 2, "not_a_recording.mcap"},
       {{"--images", dir.string(), "--calibration", calibration}, 2, "no image files"},
+      {{"--images", images.string()}, 2, "no belt calibration of its own"},
       {{"--recording", recording_path().string(), "--camera", "roof"}, 2, "unknown camera"},
       {{"--recording", recording_path().string(), "--camera", "final"}, 2, "no frames"},
       // 10 Hz is slower than the slowest line camera (25 Hz): it would only ever read stale.

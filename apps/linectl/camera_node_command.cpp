@@ -275,7 +275,15 @@ int camera_serve_command(const CameraServeArgs& args) {
       }
       continue;
     }
-    if (!frame) break;
+    if (!frame) {
+      // A file ends; a camera device does not: its end is a camera that stopped delivering.
+      if (opened->live) {
+        spdlog::error("camera {}: {} stopped delivering frames", args.camera,
+                      opened->source->describe());
+        source_failed = true;
+      }
+      break;
+    }
     ++stats.frames_read;
     // Exposure on this host's CLOCK_MONOTONIC, which the controller's frame ages are on. A
     // file's frames keep their own spacing (scaled by --speed) from the start; a device's
