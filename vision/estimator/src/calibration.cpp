@@ -2,6 +2,7 @@
 #include "fl/vision/calibration.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -172,7 +173,7 @@ IntrinsicsResult calibrate_intrinsics(const std::vector<cv::Mat>& views,
                            std::to_string(image_points.size()) + " of " +
                            std::to_string(views.size()) + " (not found in views:" + missing + ")");
   }
-  int flags = 0;
+  int flags = cv::CALIB_FIX_K3;
   if (fix_distortion) {
     flags |= cv::CALIB_FIX_K1 | cv::CALIB_FIX_K2 | cv::CALIB_FIX_K3 | cv::CALIB_ZERO_TANGENT_DIST;
   }
@@ -186,6 +187,20 @@ IntrinsicsResult calibrate_intrinsics(const std::vector<cv::Mat>& views,
     result.distortion[i] = distortion.at<double>(i);
   }
   result.views_used = static_cast<int>(image_points.size());
+  std::array<bool, kCoverageColumns * kCoverageRows> covered{};
+  for (const auto& view : image_points) {
+    for (const cv::Point2f& corner : view) {
+      const int column = std::clamp(
+          static_cast<int>(corner.x * kCoverageColumns / static_cast<float>(image_size.width)), 0,
+          kCoverageColumns - 1);
+      const int row = std::clamp(
+          static_cast<int>(corner.y * kCoverageRows / static_cast<float>(image_size.height)), 0,
+          kCoverageRows - 1);
+      covered[static_cast<std::size_t>(row * kCoverageColumns + column)] = true;
+    }
+  }
+  result.covered_share = static_cast<double>(std::count(covered.begin(), covered.end(), true)) /
+                         static_cast<double>(covered.size());
   return result;
 }
 

@@ -81,6 +81,19 @@ int main(int argc, char** argv) {
                   intrinsics->views_used, intrinsics->rms_px, intrinsics->camera_matrix(0, 0),
                   intrinsics->camera_matrix(1, 1), intrinsics->camera_matrix(0, 2),
                   intrinsics->camera_matrix(1, 2));
+      std::printf(
+          "distortion: k1 %.4f k2 %.4f p1 %.5f p2 %.5f; board corners covered %.0f %% "
+          "of the image\n",
+          intrinsics->distortion[0], intrinsics->distortion[1], intrinsics->distortion[2],
+          intrinsics->distortion[3], 100.0 * intrinsics->covered_share);
+      if (!fix_distortion && intrinsics->covered_share < fl::vision::kMinCoveredShare) {
+        std::fprintf(stderr,
+                     "warning: the views' board corners cover only %.0f %% of the image (%d x %d "
+                     "cells); the lens model is extrapolated where they never were. Add views "
+                     "with the board near each image corner and edge.\n",
+                     100.0 * intrinsics->covered_share, fl::vision::kCoverageColumns,
+                     fl::vision::kCoverageRows);
+      }
     }
     fl::vision::BeltFrameDefinition frame;
     frame.board_yaw_rad = board_yaw_deg * std::numbers::pi / 180.0;

@@ -67,11 +67,24 @@ struct IntrinsicsResult {
   cv::Vec<double, 5> distortion{0, 0, 0, 0, 0};
   double rms_px = 0.0;
   int views_used = 0;
+  // Share of the image (in a kCoverageCells grid) that held a board corner in some view. The
+  // distortion model is fitted where the corners were; beyond them a polynomial extrapolates
+  // freely, so a low share means corners of the image whose mapping nobody measured.
+  double covered_share = 0.0;
 };
+inline constexpr int kCoverageColumns = 8;
+inline constexpr int kCoverageRows = 6;
+// Below this the views leave image regions unmeasured and fl_calibrate warns. Three
+// quarters: a whole board in view cannot put a corner into every outermost cell, and views
+// that covered 79 % kept the belt mapping within 2 px over the whole image (test
+// Calibration.BarrelDistortionIsFittedAndUndoneThroughToTheEstimate).
+inline constexpr double kMinCoveredShare = 0.75;
 
 // cv::calibrateCamera over views of the board in different poses (at least 3 where it is
-// found). `fix_distortion` keeps k1..k3, p1, p2 at zero (for a lens known to be rectilinear, or
-// for few views). Throws CalibrationError naming the views where the board was not found.
+// found). Radial k1, k2 and tangential p1, p2 are fitted; k3 stays zero, as for any lens that
+// is not a fisheye: with k3 free the fit chases the corners' noise and diverges outside them.
+// `fix_distortion` keeps all at zero (for a lens known to be rectilinear, or for few views).
+// Throws CalibrationError naming the views where the board was not found.
 IntrinsicsResult calibrate_intrinsics(const std::vector<cv::Mat>& views,
                                       const CheckerboardSpec& board, bool fix_distortion = false);
 
