@@ -212,19 +212,20 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
   const double nan = std::numeric_limits<double>::quiet_NaN();
   // The moves: 2 per parameter, run on every core; a move past the box is not made.
   std::vector<std::vector<double>> moves;
+  std::vector<bool> made;  // inside the box: evaluated and judged
   std::vector<double> moved_rmse(2 * dimensions, nan);
   for (std::size_t p = 0; p < dimensions; ++p) {
     for (const double direction : {-1.0, 1.0}) {
       std::vector<double> point = best_unit;
       point[p] += direction * kSensitivityStep;
-      moves.push_back(point);
+      made.push_back(point[p] >= 0.0 && point[p] <= 1.0);
+      moves.push_back(std::move(point));
     }
   }
   model_tests::parallel_for(
       moves.size(), std::max(1, threads),
       [&](std::size_t k) {
-        const double u = moves[k][k / 2];
-        if (u < 0.0 || u > 1.0) return;
+        if (!made[k]) return;
         moved_rmse[k] = detail::guarded_value(
             [&](const std::vector<double>& point) { return evaluator.rmse(point); }, moves[k],
             "calibrate: sensitivity");
@@ -247,8 +248,7 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
     int moves_made = 0;
     int significant = 0;
     for (std::size_t side = 0; side < 2; ++side) {
-      const double u = moves[2 * p + side][p];
-      if (u < 0.0 || u > 1.0) continue;
+      if (!made[2 * p + side]) continue;
       ++moves_made;
       const double rmse = moved_rmse[2 * p + side];
       // A refused point counts as significant: the model cannot even run there.
