@@ -183,14 +183,8 @@ CLI::App* add_camera_subcommand(CLI::App& app, CameraServeArgs& args) {
 }
 
 int camera_serve_command(const CameraServeArgs& args) {
-  const std::optional<CameraId> camera = rec::camera_from_name(args.camera);
-  if (!camera) {
-    spdlog::error(
-        "--camera {}: unknown camera (orientation, position, multilane1, multilane2, "
-        "final)",
-        args.camera);
-    return 2;
-  }
+  const std::optional<CameraId> camera = camera_option(args.camera);
+  if (!camera) return 2;
   const std::optional<double> wait_s = parse_duration_s(args.wait);
   std::optional<double> duration_s;
   if (!args.duration.empty()) duration_s = parse_duration_s(args.duration);
@@ -199,15 +193,8 @@ int camera_serve_command(const CameraServeArgs& args) {
                   args.wait, args.duration);
     return 2;
   }
-  vision::EstimatorParams params;
-  try {
-    for (const std::string& setting : args.estimator_settings) {
-      rec::set_estimator_param(params, setting);
-    }
-  } catch (const std::invalid_argument& error) {
-    spdlog::error("--set: {}", error.what());
-    return 2;
-  }
+  const std::optional<vision::EstimatorParams> params = estimator_options(args.estimator_settings);
+  if (!params) return 2;
   std::optional<OpenedSource> opened = open_source(args, *camera);
   if (!opened) return 2;
   const std::optional<vision::BeltCalibration> calibration = choose_calibration(args, *opened);
@@ -229,7 +216,7 @@ int camera_serve_command(const CameraServeArgs& args) {
   }
   std::unique_ptr<vision::FilletEstimator> estimator;
   try {
-    estimator = std::make_unique<vision::FilletEstimator>(*calibration, params);
+    estimator = std::make_unique<vision::FilletEstimator>(*calibration, *params);
   } catch (const std::invalid_argument& error) {
     spdlog::error("camera serve: {}", error.what());
     return 2;
@@ -354,13 +341,10 @@ int camera_serve_command(const CameraServeArgs& args) {
       static_cast<double>(estimate_summary.max_ns) / 1e3,
       static_cast<double>(lateness_summary.p99_ns) / 1e3);
   std::fflush(stdout);
-  if (!args.json_path.empty()) {
-    std::ofstream file(args.json_path);
-    if (!file) {
-      spdlog::error("--json {}: cannot open for writing", args.json_path);
-      return 1;
-    }
-    file << stats_json(args, stats, estimate_time, lateness, wall_s).dump(2) << '\n';
+  if (!args.json_path.empty() &&
+      !write_json_option(args.json_path,
+                         stats_json(args, stats, estimate_time, lateness, wall_s))) {
+    return 1;
   }
   if (source_failed) return 1;
   return stats.frames_published > 0 ? 0 : 1;

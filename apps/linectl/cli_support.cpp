@@ -10,6 +10,8 @@
 #include "fl/twin/dem_plant/dem_plant.hpp"
 #include "fl/twin/fast_plant.hpp"
 #include "fl/twin/fast_plant_config.hpp"
+#include "fl/vision/record/recording.hpp"
+#include "fl/vision/record/replay.hpp"
 
 namespace fl::apps {
 
@@ -113,6 +115,37 @@ nlohmann::json summary_json(const DistributionSummary& summary) {
           {"p50", static_cast<double>(summary.p50_ns) / 1e3},
           {"p99", static_cast<double>(summary.p99_ns) / 1e3},
           {"max", static_cast<double>(summary.max_ns) / 1e3}};
+}
+
+bool write_json_option(const std::string& path, const nlohmann::json& json) {
+  std::ofstream file(path);
+  file << json.dump(2) << '\n';
+  if (!file) {
+    spdlog::error("--json {}: cannot write it", path);
+    return false;
+  }
+  return true;
+}
+
+std::optional<CameraId> camera_option(const std::string& name) {
+  const std::optional<CameraId> camera = vision::record::camera_from_name(name);
+  if (!camera) {
+    spdlog::error(
+        "--camera {}: unknown camera (orientation, position, multilane1, multilane2, final)", name);
+  }
+  return camera;
+}
+
+std::optional<vision::EstimatorParams> estimator_options(const std::vector<std::string>& settings) {
+  vision::EstimatorParams params;
+  try {
+    for (const std::string& setting : settings)
+      vision::record::set_estimator_param(params, setting);
+  } catch (const std::invalid_argument& error) {
+    spdlog::error("--set: {}", error.what());
+    return std::nullopt;
+  }
+  return params;
 }
 
 }  // namespace fl::apps

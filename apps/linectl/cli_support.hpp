@@ -14,6 +14,8 @@
 #include "fl/controller/ledger.hpp"
 #include "fl/controller/line_config.hpp"
 #include "fl/controller/plant.hpp"
+#include "fl/controller/process_image.hpp"
+#include "fl/vision/fillet_estimator.hpp"
 
 namespace fl::apps {
 
@@ -64,5 +66,16 @@ class LedgerWriter {
 
 // A latency distribution for the JSON reports: count, and p50, p99 and max in microseconds.
 nlohmann::json summary_json(const DistributionSummary& summary);
+
+// --json FILE: writes `json` indented; logs and returns false when the file cannot be written.
+bool write_json_option(const std::string& path, const nlohmann::json& json);
+
+// --camera NAME (orientation, position, multilane1, multilane2, final); logs and returns
+// nullopt for any other name.
+std::optional<CameraId> camera_option(const std::string& name);
+
+// --set NAME=VALUE estimator parameters over the defaults; logs and returns nullopt for an
+// unknown name or a bad value.
+std::optional<vision::EstimatorParams> estimator_options(const std::vector<std::string>& settings);
 
 }  // namespace fl::apps

@@ -260,14 +260,7 @@ int control_command(const ControlArgs& args) {
       static_cast<unsigned long long>(latency.reaction.count));
   std::fflush(stdout);
 
-  if (!args.json_path.empty()) {
-    std::ofstream file(args.json_path);
-    if (!file) {
-      spdlog::error("--json {}: cannot open for writing", args.json_path);
-      return 1;
-    }
-    file << json.dump(2) << '\n';
-  }
+  if (!args.json_path.empty() && !write_json_option(args.json_path, json)) return 1;
   if (!kpis.ledger_balanced) return 3;
   if (line_faulted) return io.sensors_stale_scans() > 0 ? 4 : 1;
   if (runtime.fault() != RuntimeFault::kNone) return 1;  // the scan stopped before the line did

@@ -149,12 +149,7 @@ int run_command(const RunArgs& args) {
   std::fputs(format_kpis(kpis).c_str(), stdout);
   std::fflush(stdout);
   if (!args.json_path.empty()) {
-    std::ofstream json(args.json_path);
-    if (!json) {
-      spdlog::error("--json {}: cannot open for writing", args.json_path);
-      return 1;
-    }
-    json << to_json(kpis).dump(2) << '\n';
+    if (!write_json_option(args.json_path, to_json(kpis))) return 1;
     spdlog::info("KPIs written to {}", args.json_path);
   }
   // A scan runtime that faulted (a stalled scan, overruns in a row) stopped the line in its

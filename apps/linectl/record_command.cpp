@@ -268,14 +268,8 @@ int record_camera(const RecordArgs& args, double duration_s) {
     spdlog::error("--calibration: a real camera needs its belt calibration (fl_calibrate)");
     return 2;
   }
-  const std::optional<CameraId> camera = rec::camera_from_name(args.camera);
-  if (!camera) {
-    spdlog::error(
-        "--camera {}: unknown camera (orientation, position, multilane1, multilane2, "
-        "final)",
-        args.camera);
-    return 2;
-  }
+  const std::optional<CameraId> camera = camera_option(args.camera);
+  if (!camera) return 2;
   if (!(args.fps > 0.0)) {
     spdlog::error("--fps {}: must be positive", args.fps);
     return 2;

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "cli_support.hpp"
 #include "fl/controller/config_loader.hpp"
 #include "fl/vision/record/recording.hpp"
 #include "fl/vision/record/replay.hpp"
@@ -43,14 +44,10 @@ CLI::App* add_replay_subcommand(CLI::App& app, ReplayArgs& args) {
 
 int replay_command(const ReplayArgs& args) {
   rec::ReplayOptions options;
-  try {
-    for (const std::string& setting : args.estimator_settings) {
-      rec::set_estimator_param(options.estimator, setting);
-    }
-  } catch (const std::invalid_argument& error) {
-    spdlog::error("{}", error.what());
-    return 2;
-  }
+  const std::optional<vision::EstimatorParams> estimator =
+      estimator_options(args.estimator_settings);
+  if (!estimator) return 2;
+  options.estimator = *estimator;
   if (!args.config.empty()) options.line_config = load_line_config(args.config);
 
   const auto wall_start = std::chrono::steady_clock::now();

@@ -285,14 +285,7 @@ int twin_serve_command(const TwinServeArgs& args) {
               static_cast<double>(transport.p99_ns) / 1e3);
   std::fflush(stdout);
 
-  if (!args.json_path.empty()) {
-    std::ofstream file(args.json_path);
-    if (!file) {
-      spdlog::error("--json {}: cannot open for writing", args.json_path);
-      return 1;
-    }
-    file << json.dump(2) << '\n';
-  }
+  if (!args.json_path.empty() && !write_json_option(args.json_path, json)) return 1;
   if (!line_ran) {
     spdlog::error("twin: the controller never started the line");
     return 4;

@@ -11,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "cli_support.hpp"
 #include "fl/report/svg_plot.hpp"
 #include "fl/vision/accuracy.hpp"
 #include "fl/vision/fillet_estimator.hpp"
@@ -254,15 +255,10 @@ CLI::App* add_vision_subcommand(CLI::App& app, VisionEvalArgs& args) {
 }
 
 int vision_eval_command(const VisionEvalArgs& args) {
-  vision::EstimatorParams params;
-  try {
-    for (const std::string& setting : args.estimator_settings) {
-      rec::set_estimator_param(params, setting);
-    }
-  } catch (const std::invalid_argument& error) {
-    spdlog::error("--set: {}", error.what());
-    return 2;
-  }
+  const std::optional<vision::EstimatorParams> estimator_params =
+      estimator_options(args.estimator_settings);
+  if (!estimator_params) return 2;
+  const vision::EstimatorParams& params = *estimator_params;
   const std::filesystem::path missed_directory =
       std::filesystem::path(args.out_directory) / "missed";
   std::filesystem::remove_all(missed_directory);  // a rerun's misses only
