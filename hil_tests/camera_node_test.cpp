@@ -25,8 +25,7 @@
 #include "fl/drivers/dds/camera_input.hpp"
 #include "fl/vision/fillet_estimator.hpp"
 #include "fl/vision/record/recording.hpp"
-
-extern char** environ;
+#include "process_support.hpp"
 
 namespace fl {
 namespace {
@@ -34,6 +33,11 @@ namespace {
 namespace fs = std::filesystem;
 namespace dds = fl::drivers::dds;
 namespace rec = fl::vision::record;
+using hil::exit_code;
+using hil::load;
+using hil::spawn;
+using hil::text;
+using hil::wait_exit;
 
 // Domains of their own: two_process_dds_tests use 50-52, the dds tests 11-42.
 constexpr int kDomainRecording = 53;
@@ -45,38 +49,6 @@ constexpr auto kNodeLimit = std::chrono::seconds(60);
 
 fs::path recording_path() {
   return fs::path(FL_SOURCE_DIR) / "vision/record/testdata/fast_seed1_orientation.mcap";
-}
-
-pid_t spawn(const std::vector<std::string>& args, const fs::path& log) {
-  std::vector<char*> argv;
-  for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  pid_t pid = -1;
-  const int error = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
-  posix_spawn_file_actions_destroy(&actions);
-  EXPECT_EQ(error, 0) << "posix_spawn " << args[0];
-  return error == 0 ? pid : -1;
-}
-
-int exit_code(int status) {
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
-int run_to_end(const std::vector<std::string>& args, const fs::path& log) {
-  const pid_t pid = spawn(args, log);
-  int status = 0;
-  if (pid <= 0 || waitpid(pid, &status, 0) != pid) return -1;
-  return exit_code(status);
-}
-
-std::string text(const fs::path& file) {
-  std::ifstream in(file);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 fs::path fresh_dir(const std::string& name) {
@@ -143,12 +115,6 @@ void expect_same_estimates(const CameraFrame& over_dds, const CameraFrame& in_pr
   }
 }
 
-nlohmann::json load_json(const fs::path& file) {
-  std::ifstream in(file);
-  EXPECT_TRUE(in.good()) << file;
-  return in ? nlohmann::json::parse(in) : nlohmann::json::object();
-}
-
 class CameraNode : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -212,7 +178,7 @@ TEST_F(CameraNode, PublishesWhatTheInProcessEstimatorMeasures) {
     previous = &frame;
   }
 
-  const nlohmann::json stats = load_json(dir / "node.json");
+  const nlohmann::json stats = load(dir / "node.json");
   EXPECT_EQ(stats["frames_read"].get<std::size_t>(), total);
   EXPECT_EQ(stats["frames_published"].get<std::size_t>() +
                 stats["frames_dropped_late"].get<std::size_t>(),
@@ -283,7 +249,7 @@ TEST_F(CameraNode, ServesPastAnUnreadableImageAndReportsAWrongSizeAsNoFillet) {
   }
   // 7 frames at 40 ms polled every millisecond: each of them arrives.
   EXPECT_EQ(received.frames.size(), 7U);
-  const nlohmann::json stats = load_json(dir / "node.json");
+  const nlohmann::json stats = load(dir / "node.json");
   EXPECT_EQ(stats["frames_unreadable"].get<int>(), 1);
   EXPECT_EQ(stats["frame_status"]["wrong resolution"].get<int>(), 1);
   EXPECT_EQ(stats["frame_status"]["ok"].get<int>(), 6);
@@ -326,7 +292,7 @@ TEST_F(CameraNode, RefusesWhatItCannotServeAndSaysWhy) {
     std::vector<std::string> args = {linectl, "camera", "serve"};
     args.insert(args.end(), c.options.begin(), c.options.end());
     const fs::path log = dir / ("case" + std::to_string(index++) + ".log");
-    EXPECT_EQ(run_to_end(args, log), c.exit) << c.options[0] << " ...\n" << text(log);
+    EXPECT_EQ(wait_exit(spawn(args, log)), c.exit) << c.options[0] << " ...\n" << text(log);
     EXPECT_NE(text(log).find(c.says), std::string::npos) << "expected \"" << c.says << "\" in:\n"
                                                          << text(log);
   }

@@ -75,9 +75,9 @@ TEST(CanopenClosedLoop, FastPlantBehindTheBusMatchesTheDirectRun) {
   // all along, nothing refused or dropped.
   const drivers::CanopenCounters& counters = plant.master().counters();
   ASSERT_GE(counters.syncs_sent, scans + 1);
-  EXPECT_LE(counters.syncs_sent - scans,
-            static_cast<std::uint64_t>(can.enable_timeout_ms) * 1'000'000 /
-                static_cast<std::uint64_t>(can.cycle_period_ns));
+  EXPECT_LE(counters.syncs_sent - scans, static_cast<std::uint64_t>(can.enable_timeout_ms) *
+                                             1'000'000 /
+                                             static_cast<std::uint64_t>(can.cycle_period_ns));
   EXPECT_EQ(counters.send_failures, 0U);
   EXPECT_EQ(counters.unknown_cob_id, 0U);
   EXPECT_EQ(counters.malformed_frames, 0U);

@@ -20,12 +20,16 @@
 #include <string_view>
 #include <vector>
 
-extern char** environ;
+#include "process_support.hpp"
 
 namespace fl {
 namespace {
 
 namespace fs = std::filesystem;
+using hil::load;
+using hil::spawn;
+using hil::text;
+using hil::wait_exit;
 
 // About a minute of line time, as the issue asks for this test: long enough for some 60
 // fillets (the design rate is 60 per minute), so that one fillet is under 2 % of the in-spec
@@ -43,53 +47,6 @@ constexpr const char* kTwinFifo = "49";
 // Tolerances of the issue: in-spec share within 1 percentage point, throughput within 5 %.
 constexpr double kInSpecTolerance = 0.01;
 constexpr double kThroughputTolerance = 0.05;
-
-// `environment`: NAME=VALUE entries that replace the inherited ones of the same name (the
-// secured run gives each process its own CYCLONEDDS_URI).
-pid_t spawn(const std::vector<std::string>& args, const fs::path& log,
-            const std::vector<std::string>& environment = {}) {
-  std::vector<char*> argv;
-  for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
-  argv.push_back(nullptr);
-  std::vector<char*> envp;
-  for (char** entry = environ; *entry != nullptr; ++entry) {
-    const std::string_view inherited(*entry);
-    const bool replaced = std::any_of(environment.begin(), environment.end(), [&](const auto& e) {
-      const std::size_t name_end = e.find('=');
-      return inherited.substr(0, name_end + 1) == std::string_view(e).substr(0, name_end + 1);
-    });
-    if (!replaced) envp.push_back(*entry);
-  }
-  for (const std::string& entry : environment) envp.push_back(const_cast<char*>(entry.c_str()));
-  envp.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, log.c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
-  pid_t pid = -1;
-  const int error = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), envp.data());
-  posix_spawn_file_actions_destroy(&actions);
-  EXPECT_EQ(error, 0) << "posix_spawn " << args[0];
-  return error == 0 ? pid : -1;
-}
-
-int wait_exit(pid_t pid) {
-  int status = 0;
-  if (pid <= 0 || waitpid(pid, &status, 0) != pid) return -1;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-}
-
-nlohmann::json load(const fs::path& file) {
-  std::ifstream in(file);
-  EXPECT_TRUE(in.good()) << file;
-  return in ? nlohmann::json::parse(in) : nlohmann::json::object();
-}
-
-std::string text(const fs::path& file) {
-  std::ifstream in(file);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 struct TwoProcessRun {
   int control_exit = -1;

@@ -42,15 +42,6 @@ constexpr double kProgressEveryS = 10.0;
 std::atomic<bool> g_camera_interrupted{false};
 extern "C" void on_camera_signal(int /*signal*/) { g_camera_interrupted.store(true); }
 
-void sleep_until(std::int64_t time_ns) {
-  timespec ts{};
-  ts.tv_sec = static_cast<time_t>(time_ns / 1'000'000'000);
-  ts.tv_nsec = static_cast<long>(time_ns % 1'000'000'000);
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-    if (g_camera_interrupted.load()) return;
-  }
-}
-
 struct NodeStats {
   std::uint64_t frames_read = 0;
   std::uint64_t frames_published = 0;
@@ -285,7 +276,7 @@ int camera_serve_command(const CameraServeArgs& args) {
         ++stats.frames_dropped_late;
         continue;
       }
-      sleep_until(exposure_ns);
+      sleep_until_ns(exposure_ns, g_camera_interrupted);
       if (g_camera_interrupted.load()) break;
     } else if (exposure_ns > end_ns) {
       break;

@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cstdlib>
+#include <ctime>
 #include <numbers>
 #include <stdexcept>
 
@@ -146,6 +147,15 @@ std::optional<vision::EstimatorParams> estimator_options(const std::vector<std::
     return std::nullopt;
   }
   return params;
+}
+
+void sleep_until_ns(std::int64_t time_ns, const std::atomic<bool>& interrupted) {
+  timespec ts{};
+  ts.tv_sec = static_cast<time_t>(time_ns / 1'000'000'000);
+  ts.tv_nsec = static_cast<long>(time_ns % 1'000'000'000);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+    if (interrupted.load()) return;
+  }
 }
 
 }  // namespace fl::apps

@@ -2,6 +2,8 @@
 // made from its name, and the ledger CSV every command that runs the controller writes.
 #pragma once
 
+#include <atomic>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -77,5 +79,9 @@ std::optional<CameraId> camera_option(const std::string& name);
 // --set NAME=VALUE estimator parameters over the defaults; logs and returns nullopt for an
 // unknown name or a bad value.
 std::optional<vision::EstimatorParams> estimator_options(const std::vector<std::string>& settings);
+
+// Sleeps until time_ns on CLOCK_MONOTONIC (absolute), waking early only when a signal
+// handler has set `interrupted`.
+void sleep_until_ns(std::int64_t time_ns, const std::atomic<bool>& interrupted);
 
 }  // namespace fl::apps

@@ -47,15 +47,6 @@ constexpr std::int64_t kCommandStaleNs = 100'000'000;
 // belts stay there; wait this long for the plant to report them gone before ending the run.
 constexpr std::int64_t kStoppedSettleNs = 1'000'000'000;
 
-void sleep_until(std::int64_t time_ns) {
-  timespec ts{};
-  ts.tv_sec = static_cast<time_t>(time_ns / 1'000'000'000);
-  ts.tv_nsec = static_cast<long>(time_ns % 1'000'000'000);
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-    if (g_twin_interrupted.load()) return;
-  }
-}
-
 bool any_drive_enabled(const OutputImage& out) {
   for (const DriveCommand& drive : out.drives) {
     if (drive.enable) return true;
@@ -167,7 +158,7 @@ int twin_serve_command(const TwinServeArgs& args) {
   const auto wall_start = std::chrono::steady_clock::now();
 
   for (std::uint64_t tick = 0; !g_twin_interrupted.load(); ++tick) {
-    sleep_until(scheduled_ns);
+    sleep_until_ns(scheduled_ns, g_twin_interrupted);
     const std::int64_t woke_ns = monotonic_now_ns();
     lateness.record(woke_ns - scheduled_ns);
     ++stats.ticks;
