@@ -1,6 +1,7 @@
 // Cross-checks fl_mcap against @mcap/core, the reference TypeScript implementation.
 //   node interop.mjs read FILE...   read files written by fl_mcap with McapIndexedReader
 //   node interop.mjs write DIR      write theirs_none.mcap and theirs_zstd.mcap with McapWriter
+//   node interop.mjs recording FILE... open camera recordings of linectl record (any content)
 // The content formulas mirror tests/interop_tool.cpp exactly; keep them in step.
 
 import { open, writeFile } from "node:fs/promises";
@@ -168,6 +169,66 @@ async function writeTheirs(file, compressChunk) {
   console.log(`@mcap/core wrote ${path.basename(file)}`);
 }
 
+// The string at `offset` of a little-endian CDR buffer: uint32 length (with the NUL), bytes.
+function cdrString(view, bytes, offset) {
+  const aligned = (offset + 3) & ~3;
+  const length = view.getUint32(aligned, true);
+  return { value: decoder.decode(bytes.subarray(aligned + 4, aligned + 4 + length - 1)), next: aligned + 4 + length };
+}
+
+// A recording as Foxglove opens it: every record's CRC, every channel with a schema whose
+// encoding the tools know, each message counted against the statistics, the attachments, and
+// each camera frame a sensor_msgs/msg/CompressedImage whose data is a PNG.
+async function readRecording(file, decompressHandlers) {
+  const handle = await open(file, "r");
+  try {
+    const { size } = await handle.stat();
+    const reader = await McapIndexedReader.Initialize({
+      readable: new FileReadable(handle, BigInt(size)),
+      decompressHandlers,
+    });
+    const perChannel = new Map();
+    let frames = 0;
+    for await (const message of reader.readMessages({ validateCrcs: true })) {
+      const channel = reader.channelsById.get(message.channelId);
+      const schema = reader.schemasById.get(channel.schemaId);
+      if (!schema || !["omgidl", "ros2msg", "jsonschema"].includes(schema.encoding)) {
+        fail(`${file}: channel ${channel.topic} has schema encoding '${schema?.encoding}'`);
+      }
+      perChannel.set(message.channelId, (perChannel.get(message.channelId) ?? 0n) + 1n);
+      if (schema.name === "sensor_msgs/msg/CompressedImage") {
+        const bytes = message.data;
+        const view = new DataView(bytes.buffer, bytes.byteOffset, bytes.byteLength);
+        const body = bytes.subarray(4);  // CDR encapsulation header
+        const bodyView = new DataView(body.buffer, body.byteOffset, body.byteLength);
+        const frameId = cdrString(bodyView, body, 8);  // after stamp (sec, nanosec)
+        const format = cdrString(bodyView, body, frameId.next);
+        const dataAt = (format.next + 3) & ~3;
+        const dataLength = bodyView.getUint32(dataAt, true);
+        const png = body.subarray(dataAt + 4, dataAt + 4 + dataLength);
+        const signature = [0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a];
+        if (view.getUint8(1) !== 1 || format.value !== "png" || !signature.every((b, k) => png[k] === b)) {
+          fail(`${file}: ${channel.topic} message ${message.sequence} is not a PNG CompressedImage`);
+        }
+        frames++;
+      }
+    }
+    const stats = reader.statistics;
+    for (const [id, count] of perChannel) {
+      if (stats.channelMessageCounts.get(id) !== count) fail(`${file}: channel ${id} count differs from the statistics`);
+    }
+    const attachments = [];
+    for await (const attachment of reader.readAttachments({ validateCrcs: true })) attachments.push(attachment.name);
+    if (frames === 0 || attachments.length === 0) fail(`${file}: no frames or no attachments`);
+    console.log(
+      `@mcap/core opened ${path.basename(file)}: ${stats.messageCount} messages on ${perChannel.size} channels, ` +
+        `${frames} PNG frames, attachments ${attachments.join(", ")}`,
+    );
+  } finally {
+    await handle.close();
+  }
+}
+
 const [command, ...args] = process.argv.slice(2);
 if (command === "read") {
   const handlers = await loadDecompressHandlers();
@@ -179,6 +240,9 @@ if (command === "read") {
     compression: "zstd",
     compressedData: zstd.compress(data, 3),
   }));
+} else if (command === "recording") {
+  const handlers = await loadDecompressHandlers();
+  for (const file of args) await readRecording(file, handlers);
 } else {
-  fail("usage: node interop.mjs read FILE... | write DIR");
+  fail("usage: node interop.mjs read FILE... | write DIR | recording FILE...");
 }
