@@ -25,8 +25,10 @@ class OneFilletScene final : public TwinScene {
   std::int64_t time_ns_ = 0;
 };
 
-// A vision-only recording (no line state), as `linectl record --images` makes.
-std::filesystem::path write_vision_recording() {
+// A vision-only recording (no line state), as `linectl record --images` makes. With
+// `lose_frame`, the image of that sequence is missing while its estimates are recorded (a
+// frame a recorder dropped, or a file cut between the two messages).
+std::filesystem::path write_vision_recording(std::uint32_t lose_frame = 0) {
   const auto path = std::filesystem::temp_directory_path() /
                     ("fl_replay_test_" + std::to_string(::getpid()) + ".mcap");
   OneFilletScene scene;
@@ -42,7 +44,9 @@ std::filesystem::path write_vision_recording() {
     scene.time_ns_ = i * 40'000'000LL;
     const SourceFrame frame = *source.next();
     const auto sequence = frame.sequence + 1;
-    writer.write_frame(CameraId::kOrientation, sequence, frame.time_ns, frame.bgr);
+    if (sequence != lose_frame) {
+      writer.write_frame(CameraId::kOrientation, sequence, frame.time_ns, frame.bgr);
+    }
     writer.write_estimates(
         CameraId::kOrientation, frame.time_ns,
         estimator.estimate(frame.bgr, frame.time_ns, sequence).to_camera_frame());
@@ -76,6 +80,24 @@ TEST(Replay, VisionOnlyRecordingReplaysEveryFrameAsRecorded) {
   EXPECT_EQ(differences.size(), 3U);
   EXPECT_NE(format_difference(differences[0]).find("singulated=0"), std::string::npos)
       << format_difference(differences[0]);
+  std::filesystem::remove(path);
+}
+
+// Estimates that name a frame the recording does not hold: replay stops with an error that
+// names the estimates message and the image topic, rather than skip the frame or measure
+// another one in its place.
+TEST(Replay, EstimatesOfAMissingFrameAreAnErrorNamingBoth) {
+  const auto path = write_vision_recording(2);
+  const Recording recording = load_recording(path);
+  try {
+    (void)replay(recording, {});
+    FAIL() << "a replay went on past a missing frame";
+  } catch (const RecordingError& error) {
+    const std::string what = error.what();
+    EXPECT_NE(what.find("names frame 2"), std::string::npos) << what;
+    EXPECT_NE(what.find("/camera/orientation/image"), std::string::npos) << what;
+    EXPECT_NE(what.find("/camera/orientation/estimates"), std::string::npos) << what;
+  }
   std::filesystem::remove(path);
 }
 
