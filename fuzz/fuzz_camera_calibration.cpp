@@ -2,7 +2,7 @@
 // contract: a BeltCalibration or ConfigError; any other exception escapes and is a finding.
 // A calibration the loader accepts must be usable: the estimator takes it (its constructor
 // refuses a degenerate homography, which the loader promises to have refused first), and
-// the image's corners map to finite belt positions and back.
+// the image's corners map to finite belt positions and back to finite pixels.
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -35,7 +35,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                                   cv::Point2d(0, height - 1), cv::Point2d(width - 1, height - 1)}) {
     const cv::Point2d belt = calibration.pixel_to_belt(pixel);
     if (!std::isfinite(belt.x) || !std::isfinite(belt.y)) __builtin_trap();
-    g_sink = g_sink + calibration.belt_to_pixel(belt).x;
+    const cv::Point2d back = calibration.belt_to_pixel(belt);
+    if (!std::isfinite(back.x) || !std::isfinite(back.y)) __builtin_trap();
+    g_sink = g_sink + back.x;
   }
   return 0;
 }

@@ -280,13 +280,13 @@ TEST(TwoProcessDds, SecuredControlAndTwinRunAndACameraCannotPoseAsTheLine) {
   // sensors, feedback and estimates all flow under encryption.
   const std::string duration = "15s";
   const std::string domain = "56";
-  const pid_t control =
-      spawn({FL_LINECTL, "control", "--duration", duration, "--domain", domain, "--config",
-             (dir / "line.yaml").string(), "--json", (dir / "control.json").string()},
-            dir / "control.log", {identity("controller")});
+  const pid_t control = spawn(
+      {FL_LINECTL, "control", "--duration", duration, "--domain", domain, "--fifo", kControlFifo,
+       "--config", (dir / "line.yaml").string(), "--json", (dir / "control.json").string()},
+      dir / "control.log", {identity("controller")});
   const pid_t twin =
       spawn({FL_LINECTL, "twin", "serve", "--plant", "fast", "--seed", "1", "--duration", duration,
-             "--domain", domain, "--json", (dir / "twin.json").string()},
+             "--domain", domain, "--fifo", kTwinFifo, "--json", (dir / "twin.json").string()},
             dir / "twin.log", {identity("twin")});
   const int twin_exit = wait_exit(twin);
   const int control_exit = wait_exit(control);

@@ -36,6 +36,10 @@ namespace dds = fl::drivers::dds;
 namespace rec = fl::vision::record;
 
 constexpr double kNsPerS = 1e9;
+// Frames stamped on arrival (a camera's own recording) spread around their nominal period:
+// a 25 Hz camera's median spacing may read a little over 40 ms. Sources up to this much
+// slower than the slowest line camera are served.
+constexpr double kPeriodTolerance = 1.1;
 constexpr std::int64_t kAckTimeoutNs = 1'000'000'000;  // for the last frames at the end
 constexpr double kProgressEveryS = 10.0;
 
@@ -174,6 +178,9 @@ CLI::App* add_camera_subcommand(CLI::App& app, CameraServeArgs& args) {
 }
 
 int camera_serve_command(const CameraServeArgs& args) {
+  // From the start, so that a stop while a recording loads or a reader is awaited counts.
+  std::signal(SIGINT, on_camera_signal);
+  std::signal(SIGTERM, on_camera_signal);
   const std::optional<CameraId> camera = camera_option(args.camera);
   if (!camera) return 2;
   const std::optional<double> wait_s = parse_duration_s(args.wait);
@@ -191,13 +198,15 @@ int camera_serve_command(const CameraServeArgs& args) {
   const std::optional<vision::BeltCalibration> calibration = choose_calibration(args, *opened);
   if (!calibration) return 2;
 
-  // The controller's reader expects a frame at least every slowest-camera period (its
-  // deadline); a source slower than that would only ever read as a stale camera: refuse it
-  // here. A device's rate is its own; its stalls show as the controller's stale camera.
+  // The controller's reader expects a frame at least every slowest-camera period (3 of them
+  // are its deadline); a source clearly slower than that would keep tripping it and the
+  // controller's silence limit: refuse it here. A device's rate is its own; its stalls show
+  // as the controller's stale camera.
   const std::int64_t period_ns =
       opened->live ? dds::kSlowestCameraPeriodNs
                    : std::llround(static_cast<double>(opened->period_ns) / args.speed);
-  if (period_ns > dds::kSlowestCameraPeriodNs) {
+  if (static_cast<double>(period_ns) >
+      kPeriodTolerance * static_cast<double>(dds::kSlowestCameraPeriodNs)) {
     spdlog::error(
         "{} at --speed {}: a frame every {:.1f} ms is slower than the line's slowest "
         "camera ({:.0f} ms); the controller would call this camera stale",
@@ -217,12 +226,14 @@ int camera_serve_command(const CameraServeArgs& args) {
       args.domain < 0 ? DDS_DOMAIN_DEFAULT : static_cast<dds_domainid_t>(args.domain);
   dds::Participant participant(domain);
   dds::DdsCameraPublisher publisher(participant, dds::kSlowestCameraPeriodNs);
-  std::signal(SIGINT, on_camera_signal);
-  std::signal(SIGTERM, on_camera_signal);
 
   spdlog::info("camera {}: {}; waiting up to {} s for a reader of the estimates", args.camera,
                opened->source->describe(), *wait_s);
   if (!wait_for_reader(publisher, *wait_s)) {
+    if (g_camera_interrupted.load()) {
+      spdlog::info("camera {}: stopped before a reader matched; nothing published", args.camera);
+      return 1;
+    }
     spdlog::error(
         "camera {}: no reader matched the estimates topic within {} s (is linectl "
         "control running on the same domain and CYCLONEDDS_URI?)",
@@ -242,7 +253,7 @@ int camera_serve_command(const CameraServeArgs& args) {
     std::optional<rec::SourceFrame> frame;
     try {
       frame = opened->source->next();
-    } catch (const std::runtime_error& error) {
+    } catch (const std::exception& error) {  // OpenCV's errors too
       // A file that does not read: logged and counted, the next one served; the controller
       // sees a sequence gap, as for a frame a real camera lost.
       ++stats.frames_unreadable;
@@ -255,7 +266,7 @@ int camera_serve_command(const CameraServeArgs& args) {
     }
     if (!frame) {
       // A file ends; a camera device does not: its end is a camera that stopped delivering.
-      if (opened->live) {
+      if (opened->live && !g_camera_interrupted.load()) {
         spdlog::error("camera {}: {} stopped delivering frames", args.camera,
                       opened->source->describe());
         source_failed = true;

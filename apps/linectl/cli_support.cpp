@@ -121,6 +121,7 @@ nlohmann::json summary_json(const DistributionSummary& summary) {
 bool write_json_option(const std::string& path, const nlohmann::json& json) {
   std::ofstream file(path);
   file << json.dump(2) << '\n';
+  file.close();  // a failed flush at close is a failed write too
   if (!file) {
     spdlog::error("--json {}: cannot write it", path);
     return false;

@@ -376,13 +376,17 @@ void CanopenIo::write(const OutputImage& out) {
   }
 
   const IoScaling& scaling = config_.io_scaling;
+  // RPDO1 of a module: the digital output byte, then analogue outputs 1 to 3.
+  const auto analog = [](float value, float units_per_count) {
+    return to_wire(to_analog_counts(value, units_per_count)) & 0xFFFFU;
+  };
+  constexpr std::size_t kFirstAnalog = 1;
   {
-    const std::array<std::uint32_t, 4> values{
-        0U,
-        to_wire(to_analog_counts(out.hopper_opening_mm, scaling.hopper_opening_mm_per_count)) &
-            0xFFFFU,
-        to_wire(to_analog_counts(out.leveller_speed_rpm, scaling.leveller_rpm_per_count)) & 0xFFFFU,
-        0U};
+    std::array<std::uint32_t, 4> values{};
+    values[kFirstAnalog + infeed_io::kHopperOpeningOut] =
+        analog(out.hopper_opening_mm, scaling.hopper_opening_mm_per_count);
+    values[kFirstAnalog + infeed_io::kLevellerSpeedOut] =
+        analog(out.leveller_speed_rpm, scaling.leveller_rpm_per_count);
     send(canopen::pack_pdo(config_.io_modules[index(IoModuleId::kInfeed)].rpdo1_cob_id,
                            canopen::layout::kIoRpdo1, values));
   }
@@ -393,10 +397,9 @@ void CanopenIo::write(const OutputImage& out) {
     outputs |= out.centring_stroke ? stations_io::kCentringStrokeOut : 0;
     outputs |= out.squeeze_roller_down ? stations_io::kSqueezeDownOut : 0;
     outputs |= out.final_reject ? stations_io::kFinalRejectOut : 0;
-    const std::array<std::uint32_t, 4> values{
-        outputs,
-        to_wire(to_analog_counts(out.centring_shift_mm, scaling.centring_mm_per_count)) & 0xFFFFU,
-        0U, 0U};
+    std::array<std::uint32_t, 4> values{outputs, 0U, 0U, 0U};
+    values[kFirstAnalog + stations_io::kCentringShiftOut] =
+        analog(out.centring_shift_mm, scaling.centring_mm_per_count);
     send(canopen::pack_pdo(config_.io_modules[index(IoModuleId::kStations)].rpdo1_cob_id,
                            canopen::layout::kIoRpdo1, values));
   }

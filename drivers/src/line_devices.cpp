@@ -45,19 +45,18 @@ OutputImage LineDevices::commands() const {
   }
   const IoScaling& scaling = config_.io_scaling;
   const IoState& infeed = modules_[index(IoModuleId::kInfeed)]->state();
-  // The master's infeed RPDO: digital byte unused, analogue 1 hopper, 2 leveller speed.
-  out.hopper_opening_mm =
-      from_analog_counts(infeed.analog_outputs[0], scaling.hopper_opening_mm_per_count);
-  out.leveller_speed_rpm =
-      from_analog_counts(infeed.analog_outputs[1], scaling.leveller_rpm_per_count);
+  out.hopper_opening_mm = from_analog_counts(infeed.analog_outputs[infeed_io::kHopperOpeningOut],
+                                             scaling.hopper_opening_mm_per_count);
+  out.leveller_speed_rpm = from_analog_counts(infeed.analog_outputs[infeed_io::kLevellerSpeedOut],
+                                              scaling.leveller_rpm_per_count);
   const IoState& stations = modules_[index(IoModuleId::kStations)]->state();
   out.flip_plate1_flip = (stations.digital_outputs & stations_io::kPlate1FlipOut) != 0;
   out.flip_plate2_flip = (stations.digital_outputs & stations_io::kPlate2FlipOut) != 0;
   out.centring_stroke = (stations.digital_outputs & stations_io::kCentringStrokeOut) != 0;
   out.squeeze_roller_down = (stations.digital_outputs & stations_io::kSqueezeDownOut) != 0;
   out.final_reject = (stations.digital_outputs & stations_io::kFinalRejectOut) != 0;
-  out.centring_shift_mm =
-      from_analog_counts(stations.analog_outputs[0], scaling.centring_mm_per_count);
+  out.centring_shift_mm = from_analog_counts(
+      stations.analog_outputs[stations_io::kCentringShiftOut], scaling.centring_mm_per_count);
   // The lamps are all the safety module learns of the line's state.
   const IoState& safety = modules_[index(IoModuleId::kSafety)]->state();
   out.state = (safety.digital_outputs & safety_io::kFaultLampOut) != 0     ? LineState::kFault
@@ -68,10 +67,13 @@ OutputImage LineDevices::commands() const {
 
 void LineDevices::set_plant_state(const InputImage& plant) {
   plant_ = plant;
+  // A fault the plant reports trips the drive, and trips it again after a fault reset for as
+  // long as the plant still reports it (a real drive's fault returns while its cause stays).
   for (std::size_t d = 0; d < kDriveCount; ++d) {
-    const bool fault = plant.drives[d].fault;
-    if (fault && !plant_fault_[d]) drives_[d]->inject_fault(kPlantDriveFaultCode);
-    plant_fault_[d] = fault;
+    const cia402::State state = drives_[d]->state().state;
+    const bool tripped =
+        state == cia402::State::kFault || state == cia402::State::kFaultReactionActive;
+    if (plant.drives[d].fault && !tripped) drives_[d]->inject_fault(kPlantDriveFaultCode);
   }
   const IoScaling& scaling = config_.io_scaling;
   IoState& infeed = modules_[index(IoModuleId::kInfeed)]->state();
@@ -122,7 +124,10 @@ void CanopenPlant::read_into(InputImage& in) {
 }
 
 void CanopenPlant::reset(std::uint64_t seed, InputImage& in) {
-  // A fresh bus, master and devices per run: a power-up of the line's network.
+  // A fresh bus, master and devices per run: a power-up of the line's network. The old
+  // master and devices hold references into the old hub: they go first.
+  master_.reset();
+  devices_.reset();
   bus_now_ns_ = 1'000'000'000;  // away from 0, which the emulation reads as "never"
   hub_ = std::make_unique<LoopbackHub>([this] { return bus_now_ns_; });
   LoopbackBus& master_bus = hub_->add_endpoint();

@@ -16,6 +16,8 @@ constexpr std::uint8_t kLevellerOverloadBit = 0x02;
 constexpr std::size_t kLevelChannel = 0;
 constexpr std::size_t kHopperOpeningChannel = 1;
 constexpr std::size_t kLevellerSpeedChannel = 2;
+constexpr std::size_t kHopperOpeningOut = 0;  // analogue outputs
+constexpr std::size_t kLevellerSpeedOut = 1;
 }  // namespace infeed_io
 namespace stations_io {
 constexpr std::uint8_t kPlate1FlippingBit = 0x01;
@@ -27,6 +29,7 @@ constexpr std::uint8_t kPlate2FlipOut = 0x02;
 constexpr std::uint8_t kCentringStrokeOut = 0x04;
 constexpr std::uint8_t kSqueezeDownOut = 0x08;
 constexpr std::uint8_t kFinalRejectOut = 0x10;
+constexpr std::size_t kCentringShiftOut = 0;  // analogue output
 }  // namespace stations_io
 namespace safety_io {
 constexpr std::uint8_t kEstopChainClosedBit = 0x01;

@@ -165,6 +165,16 @@ TEST(CanopenPlant, APlantDriveFaultReachesTheMasterAsAnEmergency) {
   EXPECT_EQ(status.emcy_code, emulation::LineDevices::kPlantDriveFaultCode);
   // The others run on.
   EXPECT_TRUE(in.drives[takt + 1].ready);
+
+  // A fault reset while the plant still reports the fault: the drive trips again, as a real
+  // drive whose cause remains (the emulated drive taken out of Fault as the reset would).
+  emulation::EmulatedCia402Drive& drive = plant.devices().drive(DriveId::kTakt);
+  drive.state().state = cia402::State::kSwitchOnDisabled;
+  drive.state().error_code = 0;
+  for (int scan = 0; scan < 3; ++scan) plant.step(out, kPeriodNs, in);
+  EXPECT_TRUE(in.drives[takt].fault) << "a fault the plant still reports was forgotten";
+  EXPECT_EQ(plant.master().drive_status(DriveId::kTakt).emcy_code,
+            emulation::LineDevices::kPlantDriveFaultCode);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // YAML file round-trips and is validated strictly.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdlib>
@@ -270,8 +271,7 @@ TEST(Calibration, BarrelDistortionIsFittedAndUndoneThroughToTheEstimate) {
 // unmeasured; and --check refuses a broken file naming the key.
 TEST(FlCalibrateCommand, CalibratesFromPicturesWarnsOfThinCoverageAndChecksFiles) {
   const auto dir =
-      std::filesystem::temp_directory_path() /
-      ("fl_calibrate_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+      std::filesystem::temp_directory_path() / ("fl_calibrate_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   const auto run = [&](const std::string& arguments, const std::string& log) {

@@ -4,6 +4,7 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <opencv2/videoio.hpp>
@@ -23,11 +24,18 @@ bool is_image_file(const std::filesystem::path& path) {
   return std::find(kExtensions.begin(), kExtensions.end(), extension) != kExtensions.end();
 }
 
-// Grey and BGRA frames become BGR: the estimator and the recording take BGR.
+// Grey, grey with alpha and BGRA frames become BGR: the estimator and the recording take
+// BGR. Any other channel count is refused by the caller's error path.
 cv::Mat to_bgr(const cv::Mat& image) {
   if (image.channels() == 3) return image;
   cv::Mat bgr;
-  cv::cvtColor(image, bgr, image.channels() == 1 ? cv::COLOR_GRAY2BGR : cv::COLOR_BGRA2BGR);
+  if (image.channels() == 2) {
+    cv::Mat grey;
+    cv::extractChannel(image, grey, 0);
+    cv::cvtColor(grey, bgr, cv::COLOR_GRAY2BGR);
+  } else {
+    cv::cvtColor(image, bgr, image.channels() == 1 ? cv::COLOR_GRAY2BGR : cv::COLOR_BGRA2BGR);
+  }
   return bgr;
 }
 
@@ -103,7 +111,11 @@ VideoCaptureFrameSource::VideoCaptureFrameSource(int device_index)
     : capture_(std::make_unique<Capture>()),
       description_("camera device " + std::to_string(device_index)),
       device_(true) {
-  if (!capture_->capture.open(device_index)) {
+  if (capture_->capture.open(device_index)) {
+    // One frame in the driver's queue: a frame stamped on arrival is then at most one period
+    // old, not the four V4L2 buffers by default.
+    capture_->capture.set(cv::CAP_PROP_BUFFERSIZE, 1);
+  } else {
     throw std::runtime_error("camera device " + std::to_string(device_index) +
                              ": VideoCapture cannot open it (/dev/video" +
                              std::to_string(device_index) + ")");
@@ -164,10 +176,13 @@ RecordingFrameSource::RecordingFrameSource(const std::filesystem::path& recordin
 RecordingFrameSource::~RecordingFrameSource() = default;
 
 std::optional<SourceFrame> RecordingFrameSource::next() {
+  if (exhausted_) return std::nullopt;
   const auto found = camera_->frames.lower_bound(next_sequence_);
   if (found == camera_->frames.end()) return std::nullopt;
   const RecordedFrame& recorded = found->second;
-  next_sequence_ = recorded.sequence + 1;
+  // The last possible sequence: nothing can follow it (and + 1 would start over at 0).
+  exhausted_ = recorded.sequence == std::numeric_limits<std::uint32_t>::max();
+  next_sequence_ = exhausted_ ? recorded.sequence : recorded.sequence + 1;
   SourceFrame frame;
   frame.bgr = decode_frame(recorded);
   // Recorded sequences count from 1 (0 is "no frame yet" on the wire).

@@ -32,6 +32,12 @@ class LineDevices {
   static constexpr std::uint16_t kPlantDriveFaultCode = 0x5400;
 
   LineDevices(CanBus& bus, const CanConfig& config);
+  // The drives' plant callbacks point back here.
+  LineDevices(const LineDevices&) = delete;
+  LineDevices& operator=(const LineDevices&) = delete;
+  LineDevices(LineDevices&&) = delete;
+  LineDevices& operator=(LineDevices&&) = delete;
+  ~LineDevices() = default;
 
   // Serves the bus: receives pending frames, steps every device (SYNC, heartbeats).
   void poll(std::int64_t now_ns) { nodes_.poll(now_ns); }
@@ -42,7 +48,8 @@ class LineDevices {
   [[nodiscard]] OutputImage commands() const;
 
   // The plant's state, sampled into the TPDOs at the next SYNC: drive velocity and encoder,
-  // a drive fault (raised once per rising edge), and the modules' inputs.
+  // a drive fault (raised again after a reset while the plant still reports it), and the
+  // modules' inputs.
   void set_plant_state(const InputImage& plant);
 
   EmulatedCia402Drive& drive(DriveId id) { return *drives_[index(id)]; }
@@ -54,7 +61,6 @@ class LineDevices {
   std::array<EmulatedCia402Drive*, kDriveCount> drives_{};
   std::array<EmulatedCia401Io*, kIoModuleCount> modules_{};
   InputImage plant_{};
-  std::array<bool, kDriveCount> plant_fault_{};
 };
 
 }  // namespace fl::drivers::emulation

@@ -102,6 +102,7 @@ class RecordingFrameSource final : public FrameSource {
   std::int64_t median_period_ns_ = 0;
   std::string description_;
   std::uint32_t next_sequence_ = 0;  // the recorded sequence to deliver next (or the one after)
+  bool exhausted_ = false;
   std::int64_t first_exposure_ns_ = 0;
 };
 
