@@ -16,7 +16,6 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <thread>
 
 #include "cli_support.hpp"
 #include "duration.hpp"
@@ -56,8 +55,7 @@ struct NodeStats {
   std::map<std::string, std::uint64_t> frame_status;  // by vision::FrameStatus name
 };
 
-// Which source the options name, and its frame period; nullopt (logged) when they do not
-// name exactly one usable source.
+// The source the options name, and its frame period.
 struct OpenedSource {
   std::unique_ptr<rec::FrameSource> source;
   std::optional<vision::BeltCalibration> recorded_calibration;
@@ -65,6 +63,7 @@ struct OpenedSource {
   bool live = false;           // a device: frames are stamped when they arrive, not paced
 };
 
+// nullopt (logged) when the options do not name exactly one usable source.
 std::optional<OpenedSource> open_source(const CameraServeArgs& args, CameraId camera) {
   const int named = static_cast<int>(!args.recording.empty()) +
                     static_cast<int>(!args.images_dir.empty()) +
@@ -117,17 +116,6 @@ std::optional<vision::BeltCalibration> choose_calibration(const CameraServeArgs&
       "--calibration: this source has no belt calibration of its own; name the "
       "camera's (fl_calibrate writes it, config/camera_<name>.yaml)");
   return std::nullopt;
-}
-
-bool wait_for_reader(const dds::DdsCameraPublisher& publisher, double wait_s) {
-  const auto start = std::chrono::steady_clock::now();
-  while (publisher.matched_readers() == 0) {
-    const double waited_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (waited_s > wait_s || g_camera_interrupted.load()) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return true;
 }
 
 nlohmann::json stats_json(const CameraServeArgs& args, const NodeStats& stats,
@@ -229,7 +217,8 @@ int camera_serve_command(const CameraServeArgs& args) {
 
   spdlog::info("camera {}: {}; waiting up to {} s for a reader of the estimates", args.camera,
                opened->source->describe(), *wait_s);
-  if (!wait_for_reader(publisher, *wait_s)) {
+  if (!wait_until([&] { return publisher.matched_readers() > 0; }, *wait_s,
+                  [] { return g_camera_interrupted.load(); }, std::chrono::milliseconds(5))) {
     if (g_camera_interrupted.load()) {
       spdlog::info("camera {}: stopped before a reader matched; nothing published", args.camera);
       return 1;

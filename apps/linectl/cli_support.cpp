@@ -6,6 +6,7 @@
 #include <ctime>
 #include <numbers>
 #include <stdexcept>
+#include <thread>
 
 #include "duration.hpp"
 #include "fl/twin/dem_plant/dem_plant.hpp"
@@ -157,6 +158,18 @@ void sleep_until_ns(std::int64_t time_ns, const std::atomic<bool>& interrupted) 
   while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
     if (interrupted.load()) return;
   }
+}
+
+bool wait_until(const std::function<bool()>& ready, double wait_s,
+                const std::function<bool()>& interrupted, std::chrono::milliseconds poll) {
+  const auto start = std::chrono::steady_clock::now();
+  while (!ready()) {
+    const double waited_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (waited_s > wait_s || interrupted()) return false;
+    std::this_thread::sleep_for(poll);
+  }
+  return true;
 }
 
 }  // namespace fl::apps

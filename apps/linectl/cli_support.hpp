@@ -3,9 +3,11 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -83,5 +85,10 @@ std::optional<vision::EstimatorParams> estimator_options(const std::vector<std::
 // Sleeps until time_ns on CLOCK_MONOTONIC (absolute), waking early only when a signal
 // handler has set `interrupted`.
 void sleep_until_ns(std::int64_t time_ns, const std::atomic<bool>& interrupted);
+
+// Polls `ready` every `poll` until it holds (true), `wait_s` has passed or `interrupted`
+// holds (false): how the two-process commands and the camera node wait for their peer.
+bool wait_until(const std::function<bool()>& ready, double wait_s,
+                const std::function<bool()>& interrupted, std::chrono::milliseconds poll);
 
 }  // namespace fl::apps

@@ -114,18 +114,13 @@ int control_command(const ControlArgs& args) {
   // The line's I/O first: a controller that starts scanning before the sensors arrive sees an
   // open safety chain and latches kEstop (DdsProcessIo), which only an acknowledge clears.
   spdlog::info("control: waiting up to {} s for the line's sensors", times->wait_s);
-  const auto wait_start = std::chrono::steady_clock::now();
-  while (!sensors.delivered()) {
-    const double waited_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - wait_start).count();
-    if (waited_s > times->wait_s || g_control_interrupts.load() > 0) {
-      spdlog::error(
-          "control: no LineSensors on '{}' within {} s (is the twin or the line's I/O "
-          "running on the same domain and CYCLONEDDS_URI?)",
-          dds::kSensorsTopic, times->wait_s);
-      return 4;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  if (!wait_until([&] { return sensors.delivered(); }, times->wait_s,
+                  [] { return g_control_interrupts.load() > 0; }, std::chrono::milliseconds(1))) {
+    spdlog::error(
+        "control: no LineSensors on '{}' within {} s (is the twin or the line's I/O "
+        "running on the same domain and CYCLONEDDS_URI?)",
+        dds::kSensorsTopic, times->wait_s);
+    return 4;
   }
 
   KpiCollector collector(line);

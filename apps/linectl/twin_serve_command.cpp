@@ -15,7 +15,6 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <thread>
 
 #include "cli_support.hpp"
 #include "fl/apps/closed_loop.hpp"
@@ -109,18 +108,13 @@ int twin_serve_command(const TwinServeArgs& args) {
   // then nothing is published, so the controller's first input image is the plant at time 0.
   spdlog::info("twin: {} plant, seed {}, {} s of feeding; waiting up to {} s for a controller",
                plant->name(), args.seed, times->duration_s, times->wait_s);
-  const auto wait_start = std::chrono::steady_clock::now();
-  while (commands.matched_writers() == 0) {
-    const double waited_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - wait_start).count();
-    if (waited_s > times->wait_s || g_twin_interrupted.load()) {
-      spdlog::error(
-          "twin: no controller matched the command topic within {} s (is linectl "
-          "control running on the same domain and CYCLONEDDS_URI?)",
-          times->wait_s);
-      return 4;
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  if (!wait_until([&] { return commands.matched_writers() > 0; }, times->wait_s,
+                  [] { return g_twin_interrupted.load(); }, std::chrono::milliseconds(5))) {
+    spdlog::error(
+        "twin: no controller matched the command topic within {} s (is linectl "
+        "control running on the same domain and CYCLONEDDS_URI?)",
+        times->wait_s);
+    return 4;
   }
 
   if (args.fifo_priority > 0) {

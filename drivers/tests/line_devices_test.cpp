@@ -57,19 +57,26 @@ InputImage plant_reading() {
   return in;
 }
 
-TEST(CanopenPlant, EverySensorAndFeedbackReachesTheMasterOneSyncLater) {
-  const CanConfig config = test::reference_can_config();
+// The scripted plant behind the bus of config/can.yaml, reset (the master's start-up done)
+// with the safety chain closed.
+class CanopenPlantTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    inner.next.estop_ok = true;
+    plant.reset(1, in);
+    ASSERT_TRUE(plant.startup().ok);
+  }
+
   ScriptedPlant inner;
-  CanopenPlant plant(inner, config);
+  CanopenPlant plant{inner, test::reference_can_config()};
   InputImage in{};
-  plant.reset(1, in);
-  ASSERT_TRUE(plant.startup().ok);
+};
+
+TEST_F(CanopenPlantTest, EverySensorAndFeedbackReachesTheMasterOneSyncLater) {
   EXPECT_FALSE(in.takt_beam_broken);  // the empty plant of reset
 
   inner.next = plant_reading();
-  OutputImage out{};
-  out.state = LineState::kRunning;
-  for (DriveCommand& drive : out.drives) drive.enable = true;
+  const OutputImage out = test::all_drives(true, 0.0F);
   // Step 1: the plant moves to the new reading after the SYNC has sampled the old one.
   plant.step(out, kPeriodNs, in);
   EXPECT_FALSE(in.takt_beam_broken) << "a reading taken after the SYNC came too early";
@@ -97,15 +104,7 @@ TEST(CanopenPlant, EverySensorAndFeedbackReachesTheMasterOneSyncLater) {
   EXPECT_FALSE(in.start_request);
 }
 
-TEST(CanopenPlant, EveryCommandReachesThePlantAtTheSync) {
-  const CanConfig config = test::reference_can_config();
-  ScriptedPlant inner;
-  inner.next.estop_ok = true;
-  CanopenPlant plant(inner, config);
-  InputImage in{};
-  plant.reset(1, in);
-  ASSERT_TRUE(plant.startup().ok);
-
+TEST_F(CanopenPlantTest, EveryCommandReachesThePlantAtTheSync) {
   OutputImage out{};
   out.state = LineState::kRunning;
   for (std::size_t d = 0; d < kDriveCount; ++d) {
@@ -143,17 +142,8 @@ TEST(CanopenPlant, EveryCommandReachesThePlantAtTheSync) {
   EXPECT_EQ(got.state, LineState::kRunning);  // the running lamp
 }
 
-TEST(CanopenPlant, APlantDriveFaultReachesTheMasterAsAnEmergency) {
-  const CanConfig config = test::reference_can_config();
-  ScriptedPlant inner;
-  inner.next.estop_ok = true;
-  CanopenPlant plant(inner, config);
-  InputImage in{};
-  plant.reset(1, in);
-  ASSERT_TRUE(plant.startup().ok);
-  OutputImage out{};
-  out.state = LineState::kRunning;
-  for (DriveCommand& drive : out.drives) drive.enable = true;
+TEST_F(CanopenPlantTest, APlantDriveFaultReachesTheMasterAsAnEmergency) {
+  const OutputImage out = test::all_drives(true, 0.0F);
   const auto takt = static_cast<std::size_t>(DriveId::kTakt);
   inner.next.drives[takt].fault = true;
   // The fault enters the device after step 1's SYNC; the EMCY and the Fault state go out at

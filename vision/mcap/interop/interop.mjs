@@ -56,7 +56,8 @@ class FileReadable {
   }
 }
 
-async function readOurs(file, decompressHandlers) {
+// Runs `use(reader)` on the file opened with @mcap/core's indexed reader, then closes it.
+async function withIndexedReader(file, decompressHandlers, use) {
   const handle = await open(file, "r");
   try {
     const { size } = await handle.stat();
@@ -64,6 +65,14 @@ async function readOurs(file, decompressHandlers) {
       readable: new FileReadable(handle, BigInt(size)),
       decompressHandlers,
     });
+    await use(reader);
+  } finally {
+    await handle.close();
+  }
+}
+
+async function readOurs(file, decompressHandlers) {
+  await withIndexedReader(file, decompressHandlers, async (reader) => {
     if (reader.chunkIndexes.length < 2) fail(`${file}: expected several chunks`);
     if (reader.header.library !== "fl_mcap") fail(`${file}: library '${reader.header.library}'`);
     let i = 0;
@@ -115,9 +124,7 @@ async function readOurs(file, decompressHandlers) {
       `@mcap/core read ${path.basename(file)}: ${i} messages in ${reader.chunkIndexes.length} chunks ` +
         `[${compressions.join(",")}], data section CRC ${reader.dataSectionCrc}`,
     );
-  } finally {
-    await handle.close();
-  }
+  });
 }
 
 async function writeTheirs(file, compressChunk) {
@@ -180,13 +187,7 @@ function cdrString(view, bytes, offset) {
 // encoding the tools know, each message counted against the statistics, the attachments, and
 // each camera frame a sensor_msgs/msg/CompressedImage whose data is a PNG.
 async function readRecording(file, decompressHandlers) {
-  const handle = await open(file, "r");
-  try {
-    const { size } = await handle.stat();
-    const reader = await McapIndexedReader.Initialize({
-      readable: new FileReadable(handle, BigInt(size)),
-      decompressHandlers,
-    });
+  await withIndexedReader(file, decompressHandlers, async (reader) => {
     const perChannel = new Map();
     let frames = 0;
     for await (const message of reader.readMessages({ validateCrcs: true })) {
@@ -224,9 +225,7 @@ async function readRecording(file, decompressHandlers) {
       `@mcap/core opened ${path.basename(file)}: ${stats.messageCount} messages on ${perChannel.size} channels, ` +
         `${frames} PNG frames, attachments ${attachments.join(", ")}`,
     );
-  } finally {
-    await handle.close();
-  }
+  });
 }
 
 const [command, ...args] = process.argv.slice(2);
