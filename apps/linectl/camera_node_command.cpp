@@ -27,6 +27,7 @@
 #include "fl/vision/record/frame_source.hpp"
 #include "fl/vision/record/recording.hpp"
 #include "fl/vision/record/replay.hpp"
+#include "vision_options.hpp"
 
 namespace fl::apps {
 namespace {

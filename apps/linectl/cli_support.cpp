@@ -12,8 +12,6 @@
 #include "fl/twin/dem_plant/dem_plant.hpp"
 #include "fl/twin/fast_plant.hpp"
 #include "fl/twin/fast_plant_config.hpp"
-#include "fl/vision/record/recording.hpp"
-#include "fl/vision/record/replay.hpp"
 
 namespace fl::apps {
 
@@ -130,25 +128,12 @@ bool write_json_option(const std::string& path, const nlohmann::json& json) {
   return true;
 }
 
-std::optional<CameraId> camera_option(const std::string& name) {
-  const std::optional<CameraId> camera = vision::record::camera_from_name(name);
-  if (!camera) {
-    spdlog::error(
-        "--camera {}: unknown camera (orientation, position, multilane1, multilane2, final)", name);
-  }
-  return camera;
-}
-
-std::optional<vision::EstimatorParams> estimator_options(const std::vector<std::string>& settings) {
-  vision::EstimatorParams params;
-  try {
-    for (const std::string& setting : settings)
-      vision::record::set_estimator_param(params, setting);
-  } catch (const std::invalid_argument& error) {
-    spdlog::error("--set: {}", error.what());
-    return std::nullopt;
-  }
-  return params;
+void add_cpu_dma_latency_option(CLI::App& command, int& latency_us) {
+  command
+      .add_option("--cpu-dma-latency", latency_us,
+                  "hold /dev/cpu_dma_latency at this many us while the scan runs (0: idle CPUs "
+                  "stay out of deep sleep states; -1: leave it alone); needs write access to it")
+      ->check(CLI::Range(-1, 100000));
 }
 
 void sleep_until_ns(std::int64_t time_ns, const std::atomic<bool>& interrupted) {

@@ -2,6 +2,7 @@
 // made from its name, and the ledger CSV every command that runs the controller writes.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -19,7 +20,6 @@
 #include "fl/controller/line_config.hpp"
 #include "fl/controller/plant.hpp"
 #include "fl/controller/process_image.hpp"
-#include "fl/vision/fillet_estimator.hpp"
 
 namespace fl::apps {
 
@@ -74,13 +74,8 @@ nlohmann::json summary_json(const DistributionSummary& summary);
 // --json FILE: writes `json` indented; logs and returns false when the file cannot be written.
 bool write_json_option(const std::string& path, const nlohmann::json& json);
 
-// --camera NAME (orientation, position, multilane1, multilane2, final); logs and returns
-// nullopt for any other name.
-std::optional<CameraId> camera_option(const std::string& name);
-
-// --set NAME=VALUE estimator parameters over the defaults; logs and returns nullopt for an
-// unknown name or a bad value.
-std::optional<vision::EstimatorParams> estimator_options(const std::vector<std::string>& settings);
+// --cpu-dma-latency US: the PM QoS request the scan's commands share (-1, the default, off).
+void add_cpu_dma_latency_option(CLI::App& command, int& latency_us);
 
 // Sleeps until time_ns on CLOCK_MONOTONIC (absolute), waking early only when a signal
 // handler has set `interrupted`.

@@ -7,6 +7,8 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <thread>
@@ -16,12 +18,14 @@
 #include "fl/controller/config_loader.hpp"
 #include "fl/controller/line_controller.hpp"
 #include "fl/controller/runtime.hpp"
+#include "fl/drivers/can_config.hpp"
+#include "fl/drivers/canopen_io.hpp"
 #include "fl/drivers/dds/camera_input.hpp"
 #include "fl/drivers/dds/line_io.hpp"
 #include "fl/drivers/dds/line_output.hpp"
 #include "fl/drivers/dds/process_io.hpp"
 #include "fl/drivers/dds/telemetry.hpp"
-#include "realtime_run.hpp"
+#include "fl/drivers/socketcan.hpp"
 #include "two_process.hpp"
 
 namespace fl::apps {
@@ -56,6 +60,71 @@ void log_control_event(const Event& event) {
   }
 }
 
+// The controller's process image on the line's buses: drives and I/O through the CANopen
+// master, the cameras' estimates from DDS. The commands and status also go out on DDS, after
+// the scan's CAN frames, for the HMI and the plant's systems; the estimate-to-command latency
+// is measured to that DDS command, so it bounds the latency to the frames on the bus.
+class FieldbusProcessIo final : public ProcessIo {
+ public:
+  FieldbusProcessIo(drivers::CanopenIo& master, dds::DdsCameraInput& cameras,
+                    dds::DdsLineOutput& output)
+      : master_(master), cameras_(cameras), output_(output) {}
+
+  void read(std::int64_t now_ns, InputImage& in) override {
+    scan_ns_ = now_ns;
+    master_.read(now_ns, in);
+    cameras_.read(in, stamps_);
+    last_scan_ns_.store(now_ns, std::memory_order_relaxed);
+  }
+  void write(const OutputImage& out) override {
+    master_.write(out);  // RPDOs, then SYNC
+    output_.write(scan_ns_, out, stamps_);
+    stamps_.fresh_mask = 0;  // a frame's reaction is the first command after it, only
+    faults_.store(out.active_faults, std::memory_order_relaxed);
+    state_.store(out.state, std::memory_order_release);
+  }
+
+  [[nodiscard]] LineState state() const noexcept { return state_.load(std::memory_order_acquire); }
+  [[nodiscard]] std::uint32_t active_faults() const noexcept {
+    return faults_.load(std::memory_order_relaxed);
+  }
+  [[nodiscard]] std::int64_t last_scan_time_ns() const noexcept {
+    return last_scan_ns_.load(std::memory_order_relaxed);
+  }
+
+ private:
+  drivers::CanopenIo& master_;
+  dds::DdsCameraInput& cameras_;
+  dds::DdsLineOutput& output_;
+  dds::FrameStamps stamps_{};  // scan thread's own
+  std::int64_t scan_ns_ = 0;   // scan thread's own
+  std::atomic<LineState> state_{LineState::kStopped};
+  std::atomic<std::uint32_t> faults_{0};
+  std::atomic<std::int64_t> last_scan_ns_{0};
+};
+
+// What both modes share, set up by control_command().
+struct ControlParts {
+  const ControlArgs& args;
+  const RunTimes& times;
+  const LineConfig& line;
+  LedgerWriter& ledger;
+  LineController& controller;
+  LineControllerLogic& logic;
+  LineStatusPublisher& status;
+  dds::DdsTelemetryPublisher& telemetry;
+  dds::DdsCameraInput& cameras;
+  dds::DdsLineOutput& output;
+};
+
+// Where the modes differ once the scan runs.
+struct ModeHooks {
+  std::function<void()> drain;                  // the mode's own events, non-real-time
+  std::function<void(nlohmann::json&)> report;  // its counters into the JSON
+  std::function<void()> print;                  // and onto stdout
+  std::function<bool()> peer_lost;              // the line faulted for a lost peer
+};
+
 }  // namespace
 
 CLI::App* add_control_subcommand(CLI::App& app, ControlArgs& args) {
@@ -75,30 +144,23 @@ CLI::App* add_control_subcommand(CLI::App& app, ControlArgs& args) {
       ->check(CLI::Range(0, 99));
   control->add_flag("--mlock", args.lock_memory, "lock memory (mlockall)");
   add_cpu_dma_latency_option(*control, args.cpu_dma_latency_us);
+  control->add_option("--can", args.can_interface,
+                      "drives and I/O through the CANopen master on this SocketCAN interface "
+                      "(e.g. can0, vcan0) instead of the DDS sensor and command topics");
+  control->add_option("--can-config", args.can_config,
+                      "--can: the bus configuration (default can.yaml)");
   return control;
 }
 
-int control_command(const ControlArgs& args) {
-  const std::optional<RunTimes> times = parse_run_times(args.duration, args.wait, args.drain);
-  if (!times) return 2;
-  const LineConfig line = load_line_config(config_or_default(args.config, "line.yaml"));
-  LedgerWriter ledger(args.ledger_path);
+namespace {
 
-  const dds_domainid_t domain =
-      args.domain < 0 ? DDS_DOMAIN_DEFAULT : static_cast<dds_domainid_t>(args.domain);
-  dds::Participant participant(domain);
-  dds::DdsCameraInput cameras(participant);
-  dds::DdsSensorInput sensors(participant);
-  dds::DdsLineOutput output(participant);
-  dds::DdsProcessIo io(cameras, sensors, output);
-
-  LineController controller(line);
-  LineControllerLogic logic(controller);
-  // Telemetry for the plant beyond the HMI (MES, dashboards): the ledger, the KPIs and the
-  // scan timing on their DDS topics, published from this thread as the ledger drains.
-  LineStatusPublisher status;
-  logic.attach_status(&status);
-  dds::DdsTelemetryPublisher telemetry(participant);
+// The scan on the real-time runtime until the controlled stop (or a fault) ends the run; the
+// ledger summary, the timing and the mode's counters as the report. Io is DdsProcessIo or
+// FieldbusProcessIo.
+template <typename Io>
+int run_control(ControlParts& parts, Io& io, const ModeHooks& hooks) {
+  const ControlArgs& args = parts.args;
+  const RunTimes& times = parts.times;
   RuntimeOptions options;
   options.fifo_priority = args.fifo_priority;
   options.lock_memory = args.lock_memory;
@@ -106,45 +168,31 @@ int control_command(const ControlArgs& args) {
   options.on_fault = [](RuntimeFault fault) {
     spdlog::error("runtime fault: {}", to_string(fault));
   };
-  ScanRuntime runtime(io, logic, options);
+  ScanRuntime runtime(io, parts.logic, options);
 
-  std::signal(SIGINT, on_control_signal);
-  std::signal(SIGTERM, on_control_signal);
-
-  // The line's I/O first: a controller that starts scanning before the sensors arrive sees an
-  // open safety chain and latches kEstop (DdsProcessIo), which only an acknowledge clears.
-  spdlog::info("control: waiting up to {} s for the line's sensors", times->wait_s);
-  if (!wait_until([&] { return sensors.delivered(); }, times->wait_s,
-                  [] { return g_control_interrupts.load() > 0; }, std::chrono::milliseconds(1))) {
-    spdlog::error(
-        "control: no LineSensors on '{}' within {} s (is the twin or the line's I/O "
-        "running on the same domain and CYCLONEDDS_URI?)",
-        dds::kSensorsTopic, times->wait_s);
-    return 4;
-  }
-
-  KpiCollector collector(line);
+  KpiCollector collector(parts.line);
   std::uint64_t records = 0;
   const auto drain = [&] {
-    while (auto record = controller.closed_records().pop()) {
-      ledger.write(*record);
-      telemetry.publish(*record);
+    while (auto record = parts.controller.closed_records().pop()) {
+      parts.ledger.write(*record);
+      parts.telemetry.publish(*record);
       ++records;
     }
-    if (status.buffer().take()) telemetry.offer(status.buffer().front());
-    while (auto event = controller.events().pop()) {
+    if (parts.status.buffer().take()) parts.telemetry.offer(parts.status.buffer().front());
+    while (auto event = parts.controller.events().pop()) {
       collector.add_event(*event);
       log_control_event(*event);
     }
+    hooks.drain();
   };
 
   // The operator's start, as linectl run gives it, applied at the first scan.
-  logic.request_start();
+  parts.logic.request_start();
   const auto wall_start = std::chrono::steady_clock::now();
   const RealtimeSetup setup = runtime.start();
   if (!setup.error.empty()) spdlog::warn("real-time setup: {}", setup.error);
   if (!setup.started) throw std::runtime_error("the scan runtime did not start: " + setup.error);
-  spdlog::info("control: scanning; {} s of feeding, then a controlled stop", times->duration_s);
+  spdlog::info("control: scanning; {} s of feeding, then a controlled stop", times.duration_s);
 
   bool stop_sent = false;
   bool line_faulted = false;
@@ -154,8 +202,8 @@ int control_command(const ControlArgs& args) {
     drain();
     elapsed_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-    if (!stop_sent && (elapsed_s >= times->duration_s || g_control_interrupts.load() > 0)) {
-      logic.request_stop();
+    if (!stop_sent && (elapsed_s >= times.duration_s || g_control_interrupts.load() > 0)) {
+      parts.logic.request_stop();
       stop_sent = true;
     }
     const LineState state = io.state();
@@ -167,25 +215,25 @@ int control_command(const ControlArgs& args) {
       runtime.request_stop();
     }
     const bool stopped = stop_sent && state == LineState::kStopped;
-    if (stopped || elapsed_s > times->duration_s + times->drain_s ||
+    if (stopped || elapsed_s > times.duration_s + times.drain_s ||
         g_control_interrupts.load() > 1) {
       runtime.request_stop();
     }
   }
   runtime.wait();
   drain();
-  controller.close_all_in_transit(io.last_scan_time_ns(), LostReason::kRunEnded);
+  parts.controller.close_all_in_transit(io.last_scan_time_ns(), LostReason::kRunEnded);
   drain();
 
   Kpis kpis;
-  kpis.plant = "dds";
-  collector.finish(controller, 0, 0, times->duration_s, elapsed_s, elapsed_s, kpis);
+  kpis.plant = args.can_interface.empty() ? "dds" : "canopen+dds";
+  collector.finish(parts.controller, 0, 0, times.duration_s, elapsed_s, elapsed_s, kpis);
   const CycleStatsSummary stats = runtime.stats().summary();
   kpis.compute = stats.compute;
-  const dds::LineOutputCounters out = output.counters();
-  const dds::IntakeCounters intake = cameras.counters();
-  const dds::SensorInputCounters sensor_counts = sensors.counters();
-  const dds::ReactionLatency latency = output.reaction_latency();
+  const dds::LineOutputCounters out = parts.output.counters();
+  const dds::IntakeCounters intake = parts.cameras.counters();
+  const dds::ReactionLatency latency = parts.output.reaction_latency();
+  const dds::TelemetryCounters telemetry = parts.telemetry.counters();
 
   nlohmann::json json = to_json(kpis);
   for (const char* key : {"truth", "placed_per_minute", "in_spec_share_of_singulated", "plant",
@@ -202,20 +250,17 @@ int control_command(const ControlArgs& args) {
                  {"command_write_failures", out.write_failures},
                  {"estimates_accepted", intake.samples_accepted},
                  {"estimates_rejected", intake.rejected_total()},
-                 {"sensors_accepted", sensor_counts.sensors_accepted},
-                 {"sensors_rejected", sensor_counts.sensors_rejected},
-                 {"feedback_accepted", sensor_counts.feedback_accepted},
-                 {"sensors_stale_scans", io.sensors_stale_scans()},
                  {"estimate_transport_us", summary_json(latency.transport)},
                  {"estimate_to_command_us", summary_json(latency.reaction)},
-                 {"ledger_records_published", telemetry.counters().records_published},
-                 {"kpis_published", telemetry.counters().kpis_published},
-                 {"telemetry_write_failures", telemetry.counters().write_failures}};
+                 {"ledger_records_published", telemetry.records_published},
+                 {"kpis_published", telemetry.kpis_published},
+                 {"telemetry_write_failures", telemetry.write_failures}};
+  hooks.report(json);
 
   std::printf(
       "control, %.1f s fed, %.1f s wall, %llu scans, %llu overruns, wake-up latency "
       "p99.9 %.1f us max %.1f us\n",
-      times->duration_s, elapsed_s, static_cast<unsigned long long>(stats.scans),
+      times.duration_s, elapsed_s, static_cast<unsigned long long>(stats.scans),
       static_cast<unsigned long long>(stats.overruns),
       static_cast<double>(stats.wakeup_latency.p999_ns) / 1e3,
       static_cast<double>(stats.wakeup_latency.max_ns) / 1e3);
@@ -234,16 +279,14 @@ int control_command(const ControlArgs& args) {
   std::printf("\nthroughput      %.1f items/min at the takt\n", kpis.items_per_minute);
   std::printf(
       "dds             %llu commands (%llu dropped), %llu estimates (%llu rejected), "
-      "%llu sensor samples, %llu stale scans, %llu ledger records and %llu KPI samples "
-      "published\n",
+      "%llu ledger records and %llu KPI samples published\n",
       static_cast<unsigned long long>(out.commands_published),
       static_cast<unsigned long long>(out.commands_dropped),
       static_cast<unsigned long long>(intake.samples_accepted),
       static_cast<unsigned long long>(intake.rejected_total()),
-      static_cast<unsigned long long>(sensor_counts.sensors_accepted),
-      static_cast<unsigned long long>(io.sensors_stale_scans()),
-      static_cast<unsigned long long>(telemetry.counters().records_published),
-      static_cast<unsigned long long>(telemetry.counters().kpis_published));
+      static_cast<unsigned long long>(telemetry.records_published),
+      static_cast<unsigned long long>(telemetry.kpis_published));
+  hooks.print();
   std::printf(
       "latency         estimate transport p50 %.1f us p99 %.1f us; estimate to command "
       "p50 %.1f us p99 %.1f us max %.1f us (%llu frames)\n",
@@ -257,9 +300,156 @@ int control_command(const ControlArgs& args) {
 
   if (!args.json_path.empty() && !write_json_option(args.json_path, json)) return 1;
   if (!kpis.ledger_balanced) return 3;
-  if (line_faulted) return io.sensors_stale_scans() > 0 ? 4 : 1;
+  if (line_faulted) return hooks.peer_lost() ? 4 : 1;
   if (runtime.fault() != RuntimeFault::kNone) return 1;  // the scan stopped before the line did
   return 0;
+}
+
+// The line's I/O on DDS (the twin's sensor and command topics).
+int control_over_dds(ControlParts& parts, dds::Participant& participant) {
+  dds::DdsSensorInput sensors(participant);
+  dds::DdsProcessIo io(parts.cameras, sensors, parts.output);
+
+  // The line's I/O first: a controller that starts scanning before the sensors arrive sees an
+  // open safety chain and latches kEstop (DdsProcessIo), which only an acknowledge clears.
+  spdlog::info("control: waiting up to {} s for the line's sensors", parts.times.wait_s);
+  if (!wait_until([&] { return sensors.delivered(); }, parts.times.wait_s,
+                  [] { return g_control_interrupts.load() > 0; }, std::chrono::milliseconds(1))) {
+    spdlog::error(
+        "control: no LineSensors on '{}' within {} s (is the twin or the line's I/O "
+        "running on the same domain and CYCLONEDDS_URI?)",
+        dds::kSensorsTopic, parts.times.wait_s);
+    return 4;
+  }
+  ModeHooks hooks;
+  hooks.drain = [] {};
+  hooks.report = [&](nlohmann::json& json) {
+    const dds::SensorInputCounters counts = sensors.counters();
+    json["dds"]["sensors_accepted"] = counts.sensors_accepted;
+    json["dds"]["sensors_rejected"] = counts.sensors_rejected;
+    json["dds"]["feedback_accepted"] = counts.feedback_accepted;
+    json["dds"]["sensors_stale_scans"] = io.sensors_stale_scans();
+  };
+  hooks.print = [&] {
+    std::printf("sensors         %llu samples on DDS, %llu stale scans\n",
+                static_cast<unsigned long long>(sensors.counters().sensors_accepted),
+                static_cast<unsigned long long>(io.sensors_stale_scans()));
+  };
+  hooks.peer_lost = [&] { return io.sensors_stale_scans() > 0; };
+  return run_control(parts, io, hooks);
+}
+
+// The line's drives and I/O on CANopen (config/can.yaml) over a SocketCAN interface.
+int control_over_can(ControlParts& parts) {
+  drivers::CanConfig config =
+      drivers::load_can_config(config_or_default(parts.args.can_config, "can.yaml"), parts.line);
+  config.interface_name = parts.args.can_interface;
+  std::unique_ptr<drivers::SocketCanBus> bus;
+  try {
+    bus = std::make_unique<drivers::SocketCanBus>(
+        drivers::SocketCanOptions{parts.args.can_interface, {}, true, false, 0});
+  } catch (const drivers::SocketCanError& error) {
+    spdlog::error("control: --can {}: {}", parts.args.can_interface, error.what());
+    return 2;
+  }
+  drivers::CanopenIo master(*bus, config);
+  std::uint64_t nodes_lost = 0;
+  const auto drain_events = [&] {
+    drivers::CanopenEvent event;
+    while (master.pop_event(event)) {
+      if (event.kind == drivers::CanopenEventKind::kHeartbeatLost) ++nodes_lost;
+      const bool bad = event.kind == drivers::CanopenEventKind::kHeartbeatLost ||
+                       event.kind == drivers::CanopenEventKind::kEmergency;
+      spdlog::log(bad ? spdlog::level::warn : spdlog::level::debug, "canopen: {}",
+                  drivers::describe(event));
+    }
+  };
+
+  // Start-up (NMT reset, SDO configuration, NMT start, drives enabled) until every node
+  // answers: on power-up the drives may still be booting, and a twin may start later.
+  spdlog::info("control: CANopen start-up on {}, retried for up to {} s", config.interface_name,
+               parts.times.wait_s);
+  drivers::StartupReport startup;
+  const bool up = wait_until(
+      [&] {
+        startup = master.start_up(drivers::monotonic_bus_clock(), true);
+        drain_events();
+        return startup.ok;
+      },
+      parts.times.wait_s, [] { return g_control_interrupts.load() > 0; },
+      std::chrono::milliseconds(200));
+  if (!up) {
+    spdlog::error("control: the CANopen start-up on {} did not complete within {} s:",
+                  config.interface_name, parts.times.wait_s);
+    for (const std::string& problem : startup.problems) spdlog::error("  {}", problem);
+    return 4;
+  }
+  spdlog::info("control: CANopen start-up in {:.0f} ms",
+               static_cast<double>(startup.duration_ns) / 1e6);
+
+  FieldbusProcessIo io(master, parts.cameras, parts.output);
+  ModeHooks hooks;
+  hooks.drain = drain_events;
+  hooks.report = [&](nlohmann::json& json) {
+    const drivers::CanopenCounters& counts = master.counters();
+    const drivers::CanBusCounters& frames = bus->counters();
+    json["can"] = {{"interface", config.interface_name},
+                   {"startup_ms", static_cast<double>(startup.duration_ns) / 1e6},
+                   {"syncs_sent", counts.syncs_sent},
+                   {"frames_handled", counts.frames_handled},
+                   {"frames_sent", frames.frames_sent},
+                   {"frames_received", frames.frames_received},
+                   {"send_failures", counts.send_failures},
+                   {"unknown_cob_id", counts.unknown_cob_id},
+                   {"malformed_frames", counts.malformed_frames},
+                   {"events_dropped", counts.events_dropped},
+                   {"nodes_lost", nodes_lost},
+                   {"error_state", drivers::to_string(bus->error_state())}};
+  };
+  hooks.print = [&] {
+    std::printf(
+        "can             %s: %llu SYNCs, %llu frames sent, %llu handled, %llu send "
+        "failures, %llu node losses\n",
+        config.interface_name.c_str(),
+        static_cast<unsigned long long>(master.counters().syncs_sent),
+        static_cast<unsigned long long>(bus->counters().frames_sent),
+        static_cast<unsigned long long>(master.counters().frames_handled),
+        static_cast<unsigned long long>(master.counters().send_failures),
+        static_cast<unsigned long long>(nodes_lost));
+  };
+  hooks.peer_lost = [&] { return nodes_lost > 0; };
+  return run_control(parts, io, hooks);
+}
+
+}  // namespace
+
+int control_command(const ControlArgs& args) {
+  const std::optional<RunTimes> times = parse_run_times(args.duration, args.wait, args.drain);
+  if (!times) return 2;
+  const LineConfig line = load_line_config(config_or_default(args.config, "line.yaml"));
+  LedgerWriter ledger(args.ledger_path);
+
+  const dds_domainid_t domain =
+      args.domain < 0 ? DDS_DOMAIN_DEFAULT : static_cast<dds_domainid_t>(args.domain);
+  dds::Participant participant(domain);
+  dds::DdsCameraInput cameras(participant);
+  dds::DdsLineOutput output(participant);
+
+  LineController controller(line);
+  LineControllerLogic logic(controller);
+  // Telemetry for the plant beyond the HMI (MES, dashboards): the ledger, the KPIs and the
+  // scan timing on their DDS topics, published from this thread as the ledger drains.
+  LineStatusPublisher status;
+  logic.attach_status(&status);
+  dds::DdsTelemetryPublisher telemetry(participant);
+
+  std::signal(SIGINT, on_control_signal);
+  std::signal(SIGTERM, on_control_signal);
+
+  ControlParts parts{args,  *times, line,      ledger,  controller,
+                     logic, status, telemetry, cameras, output};
+  return args.can_interface.empty() ? control_over_dds(parts, participant)
+                                    : control_over_can(parts);
 }
 
 }  // namespace fl::apps

@@ -52,14 +52,6 @@ void Progress::finish() {
   if (!quiet_ && tty_) std::fprintf(stderr, "\n");
 }
 
-void add_cpu_dma_latency_option(CLI::App& command, int& latency_us) {
-  command
-      .add_option("--cpu-dma-latency", latency_us,
-                  "hold /dev/cpu_dma_latency at this many us while the scan runs (0: idle CPUs "
-                  "stay out of deep sleep states; -1: leave it alone); needs write access to it")
-      ->check(CLI::Range(-1, 100000));
-}
-
 void log_event(const Event& event) {
   switch (event.code) {
     case EventCode::kItemCreated:

@@ -37,9 +37,6 @@ class Progress {
   int last_decile_ = -1;
 };
 
-// --cpu-dma-latency US: the PM QoS request the scan's commands share (-1, the default, off).
-void add_cpu_dma_latency_option(CLI::App& command, int& latency_us);
-
 // Logs a controller event at the level its kind deserves (faults warn, items debug).
 void log_event(const Event& event);
 

@@ -22,6 +22,7 @@
 #include "fl/vision/record/recording.hpp"
 #include "fl/vision/record/twin_frame_source.hpp"
 #include "record_replay.hpp"
+#include "vision_options.hpp"
 
 namespace fl::apps {
 namespace {

@@ -13,6 +13,7 @@
 #include "fl/vision/record/recording.hpp"
 #include "fl/vision/record/replay.hpp"
 #include "record_replay.hpp"
+#include "vision_options.hpp"
 
 namespace fl::apps {
 namespace {

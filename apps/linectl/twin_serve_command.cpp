@@ -1,5 +1,6 @@
 // linectl twin serve: the plant as the line's devices and cameras on DDS, in real time
 // (two_process.hpp, docs/dds.md "Two-process mode").
+#include <poll.h>
 #include <pthread.h>
 #include <sched.h>
 #include <spdlog/spdlog.h>
@@ -22,8 +23,11 @@
 #include "fl/controller/line_controller.hpp"
 #include "fl/controller/monotonic_clock.hpp"
 #include "fl/controller/runtime.hpp"
+#include "fl/drivers/can_config.hpp"
 #include "fl/drivers/dds/line_io.hpp"
 #include "fl/drivers/dds/line_output.hpp"
+#include "fl/drivers/line_devices.hpp"
+#include "fl/drivers/socketcan.hpp"
 #include "fl/twin/dem_plant/dem_plant.hpp"
 #include "fl/twin/fast_plant.hpp"
 #include "fl/twin/fast_plant_config.hpp"
@@ -63,6 +67,144 @@ struct TwinStats {
   std::uint64_t publish_failures = 0;
 };
 
+// Where the twin meets the controller: the DDS topics (sensors out, commands in) or the
+// line's CANopen devices on a bus. The cameras are on DDS either way.
+class ControllerLink {
+ public:
+  ControllerLink() = default;
+  ControllerLink(const ControllerLink&) = delete;
+  ControllerLink& operator=(const ControllerLink&) = delete;
+  virtual ~ControllerLink() = default;
+  // Polled while waiting for the controller.
+  [[nodiscard]] virtual bool controller_present() = 0;
+  [[nodiscard]] virtual std::string how_to_connect() const = 0;
+  // Lets time pass until deadline_ns (CLOCK_MONOTONIC), serving the link meanwhile.
+  virtual void serve_until(std::int64_t deadline_ns, const std::atomic<bool>& interrupted) = 0;
+  // The controller's newest commands; false when none arrived within kCommandStaleNs.
+  virtual bool fresh_command(std::int64_t now_ns, OutputImage& out) = 0;
+  // The plant's state before the first tick, for a link whose devices answer while the
+  // controller starts up.
+  virtual void set_initial_state(const InputImage& /*plant*/) {}
+  // The plant's state for the controller's next read (sensors, drive feedback).
+  virtual bool publish(std::uint64_t tick, std::int64_t scheduled_ns, const InputImage& plant) = 0;
+  virtual void report(nlohmann::json& twin_json) const = 0;
+  [[nodiscard]] virtual std::string command_summary() const = 0;
+};
+
+class DdsLink final : public ControllerLink {
+ public:
+  explicit DdsLink(dds::Participant& participant)
+      : sensors_(participant, kPeriodNs), commands_(participant, kPeriodNs) {}
+  bool controller_present() override { return commands_.matched_writers() > 0; }
+  [[nodiscard]] std::string how_to_connect() const override {
+    return "no controller matched the command topic (is linectl control running on the same "
+           "domain and CYCLONEDDS_URI?)";
+  }
+  void serve_until(std::int64_t deadline_ns, const std::atomic<bool>& interrupted) override {
+    sleep_until_ns(deadline_ns, interrupted);
+  }
+  bool fresh_command(std::int64_t /*now_ns*/, OutputImage& out) override {
+    if (commands_.read(command_)) have_command_ = true;
+    if (!have_command_ || dds_time() - command_.arrival_ns > kCommandStaleNs) return false;
+    out = command_.out;
+    return true;
+  }
+  bool publish(std::uint64_t tick, std::int64_t scheduled_ns, const InputImage& plant) override {
+    InputImage io_in = plant;
+    io_in.time_ns = scheduled_ns;
+    return sensors_.publish(tick, io_in);
+  }
+  void report(nlohmann::json& twin_json) const override {
+    twin_json["commands_received"] = commands_.commands_received();
+    twin_json["command_transport_us"] = summary_json(commands_.transport_latency());
+  }
+  [[nodiscard]] std::string command_summary() const override {
+    const DistributionSummary transport = commands_.transport_latency();
+    return fmt::format("{} received on DDS, command transport p50 {:.1f} us p99 {:.1f} us",
+                       commands_.commands_received(), static_cast<double>(transport.p50_ns) / 1e3,
+                       static_cast<double>(transport.p99_ns) / 1e3);
+  }
+
+ private:
+  dds::DdsSensorPublisher sensors_;
+  dds::DdsCommandInput commands_;
+  dds::ReceivedCommand command_;
+  bool have_command_ = false;
+};
+
+// The line's drives and I/O modules as config/can.yaml lays them out, answering the
+// controller's CANopen master on a SocketCAN interface: the controller cannot tell them from
+// the real devices (issue 5 item 4).
+class CanLink final : public ControllerLink {
+ public:
+  CanLink(const std::string& interface_name, const drivers::CanConfig& config)
+      : bus_(drivers::SocketCanOptions{interface_name, {}, true, false, 0}),
+        devices_(bus_, config),
+        interface_name_(interface_name) {}
+  // The controller is there when its master sends SYNC: its scan runs (start-up is over).
+  bool controller_present() override { return syncs() > 0; }
+  [[nodiscard]] std::string how_to_connect() const override {
+    return fmt::format("no SYNC from a CANopen master on {} (is linectl control --can {} running?)",
+                       interface_name_, interface_name_);
+  }
+  void serve_until(std::int64_t deadline_ns, const std::atomic<bool>& interrupted) override {
+    // Frames are answered as they arrive (a SYNC's TPDOs within the master's cycle); the
+    // devices' own timers (heartbeats) are stepped at least every millisecond.
+    constexpr std::int64_t kMaxSleepNs = 1'000'000;
+    for (;;) {
+      std::int64_t now_ns = monotonic_now_ns();
+      devices_.poll(now_ns);
+      now_ns = monotonic_now_ns();
+      if (now_ns >= deadline_ns || interrupted.load()) return;
+      const std::int64_t sleep_ns = std::min(kMaxSleepNs, deadline_ns - now_ns);
+      pollfd socket{bus_.native_handle(), POLLIN, 0};
+      const timespec timeout{0, static_cast<long>(sleep_ns)};
+      ppoll(&socket, 1, &timeout, nullptr);
+    }
+  }
+  bool fresh_command(std::int64_t now_ns, OutputImage& out) override {
+    const std::uint64_t syncs_now = syncs();
+    if (syncs_now != syncs_seen_) {
+      syncs_seen_ = syncs_now;
+      last_sync_ns_ = now_ns;
+    }
+    if (syncs_seen_ == 0 || now_ns - last_sync_ns_ > kCommandStaleNs) return false;
+    out = devices_.commands();
+    return true;
+  }
+  void set_initial_state(const InputImage& plant) override { devices_.set_plant_state(plant); }
+  bool publish(std::uint64_t /*tick*/, std::int64_t /*scheduled_ns*/,
+               const InputImage& plant) override {
+    devices_.set_plant_state(plant);  // sampled into the TPDOs at the next SYNC
+    return true;
+  }
+  void report(nlohmann::json& twin_json) const override {
+    const drivers::CanBusCounters& bus = bus_.counters();
+    twin_json["can"] = {{"interface", interface_name_},
+                        {"syncs_received", syncs_seen_},
+                        {"frames_sent", bus.frames_sent},
+                        {"frames_received", bus.frames_received},
+                        {"tx_queue_full", bus.tx_queue_full},
+                        {"tx_errors", bus.tx_errors},
+                        {"rx_overruns", bus.rx_overruns},
+                        {"error_state", drivers::to_string(bus_.error_state())}};
+  }
+  [[nodiscard]] std::string command_summary() const override {
+    return fmt::format("{} SYNCs on {}, {} frames sent, {} received", syncs_seen_, interface_name_,
+                       bus_.counters().frames_sent, bus_.counters().frames_received);
+  }
+
+ private:
+  // Every drive sees every SYNC; the first one's count stands for the bus.
+  std::uint64_t syncs() { return devices_.drive(DriveId{}).counters().syncs; }
+
+  drivers::SocketCanBus bus_;
+  drivers::emulation::LineDevices devices_;
+  std::string interface_name_;
+  std::uint64_t syncs_seen_ = 0;
+  std::int64_t last_sync_ns_ = 0;
+};
+
 }  // namespace
 
 CLI::App* add_twin_subcommand(CLI::App& app, TwinServeArgs& args) {
@@ -83,6 +225,11 @@ CLI::App* add_twin_subcommand(CLI::App& app, TwinServeArgs& args) {
   serve->add_option("--drain", args.drain, "longest run after the feeding time, e.g. 60s");
   serve->add_option("--fifo", args.fifo_priority, "SCHED_FIFO priority of the tick loop (1-99)")
       ->check(CLI::Range(0, 99));
+  serve->add_option("--can", args.can_interface,
+                    "serve the line's CANopen drives and I/O on this SocketCAN interface "
+                    "(e.g. vcan0) instead of the DDS sensor and command topics");
+  serve->add_option("--can-config", args.can_config,
+                    "--can: the bus configuration (default can.yaml)");
   return serve;
 }
 
@@ -98,22 +245,43 @@ int twin_serve_command(const TwinServeArgs& args) {
   // One writer for every camera, offering the slowest camera's deadline: each camera is an
   // instance and the faster ones meet it with room to spare.
   dds::DdsCameraPublisher cameras(participant, dds::kSlowestCameraPeriodNs);
-  dds::DdsSensorPublisher sensors(participant, kPeriodNs);
-  dds::DdsCommandInput commands(participant, kPeriodNs);
+  std::unique_ptr<ControllerLink> link;
+  if (args.can_interface.empty()) {
+    link = std::make_unique<DdsLink>(participant);
+  } else {
+    drivers::CanConfig can =
+        drivers::load_can_config(config_or_default(args.can_config, "can.yaml"), line);
+    can.interface_name = args.can_interface;
+    try {
+      link = std::make_unique<CanLink>(args.can_interface, can);
+    } catch (const drivers::SocketCanError& error) {
+      spdlog::error("twin: --can {}: {}", args.can_interface, error.what());
+      return 2;
+    }
+  }
 
   std::signal(SIGINT, on_twin_signal);
   std::signal(SIGTERM, on_twin_signal);
 
-  // The plant's clock starts when a controller is there: a matched command writer. Until
-  // then nothing is published, so the controller's first input image is the plant at time 0.
-  spdlog::info("twin: {} plant, seed {}, {} s of feeding; waiting up to {} s for a controller",
-               plant->name(), args.seed, times->duration_s, times->wait_s);
-  if (!wait_until([&] { return commands.matched_writers() > 0; }, times->wait_s,
-                  [] { return g_twin_interrupted.load(); }, std::chrono::milliseconds(5))) {
-    spdlog::error(
-        "twin: no controller matched the command topic within {} s (is linectl "
-        "control running on the same domain and CYCLONEDDS_URI?)",
-        times->wait_s);
+  // The devices answer from the plant's state at time 0 while the controller starts up.
+  InputImage plant_in;
+  plant->reset(args.seed, plant_in);
+  link->set_initial_state(plant_in);
+
+  // The plant's clock starts when a controller is there (DDS: a matched command writer; CAN:
+  // the master's first SYNC). Until then no camera frame is published, so the controller's
+  // first input image is the plant at time 0.
+  spdlog::info("twin: {} plant, seed {}, {} s of feeding; waiting up to {} s for a controller{}",
+               plant->name(), args.seed, times->duration_s, times->wait_s,
+               args.can_interface.empty() ? "" : " on " + args.can_interface);
+  constexpr std::int64_t kWaitServeNs = 1'000'000;
+  if (!wait_until(
+          [&] {
+            link->serve_until(monotonic_now_ns() + kWaitServeNs, g_twin_interrupted);
+            return link->controller_present();
+          },
+          times->wait_s, [] { return g_twin_interrupted.load(); }, std::chrono::milliseconds(0))) {
+    spdlog::error("twin: {} within {} s", link->how_to_connect(), times->wait_s);
     return 4;
   }
 
@@ -127,8 +295,6 @@ int twin_serve_command(const TwinServeArgs& args) {
                    std::strerror(error));
     }
   }
-  InputImage plant_in;
-  plant->reset(args.seed, plant_in);
   KpiCollector collector(line);
   TwinStats stats;
   DurationHistogram lateness(10'000, 100'000'000);  // tick wake-up lateness, 10 us bins
@@ -142,8 +308,7 @@ int twin_serve_command(const TwinServeArgs& args) {
   const std::int64_t offset_ns = start_ns - plant_in.time_ns;
   const auto limit_ns = static_cast<std::int64_t>((times->duration_s + times->drain_s) * 1e9);
   const OutputImage safe = make_safe_output_image();
-  dds::ReceivedCommand command;
-  bool have_command = false;
+  OutputImage command{};
   bool line_ran = false;
   bool controller_lost = false;
   std::int64_t stopped_since_ns = -1;
@@ -152,15 +317,14 @@ int twin_serve_command(const TwinServeArgs& args) {
   const auto wall_start = std::chrono::steady_clock::now();
 
   for (std::uint64_t tick = 0; !g_twin_interrupted.load(); ++tick) {
-    sleep_until_ns(scheduled_ns, g_twin_interrupted);
+    link->serve_until(scheduled_ns, g_twin_interrupted);
     const std::int64_t woke_ns = monotonic_now_ns();
     lateness.record(woke_ns - scheduled_ns);
     ++stats.ticks;
     if (woke_ns - scheduled_ns > kPeriodNs) ++stats.late_ticks;
 
-    if (commands.read(command)) have_command = true;
-    const bool fresh = have_command && dds_time() - command.arrival_ns <= kCommandStaleNs;
-    const OutputImage& applied = fresh ? command.out : safe;
+    const bool fresh = link->fresh_command(woke_ns, command);
+    const OutputImage& applied = fresh ? command : safe;
     if (fresh) ++stats.commands_applied;
     if (!fresh && line_ran) {
       ++stats.stale_ticks;
@@ -187,9 +351,7 @@ int twin_serve_command(const TwinServeArgs& args) {
         spdlog::warn("twin: camera {} frame {}: {}", c, frame.sequence, error.what());
       }
     }
-    InputImage io_in = plant_in;
-    io_in.time_ns = scheduled_ns;
-    if (!sensors.publish(tick, io_in)) ++stats.publish_failures;
+    if (!link->publish(tick, scheduled_ns, plant_in)) ++stats.publish_failures;
 
     // The run ends when the controller has stopped the line after running it and the belts
     // are empty (or have stood still long enough), or at the time limit.
@@ -231,18 +393,16 @@ int twin_serve_command(const TwinServeArgs& args) {
     json.erase(key);
   }
   const DistributionSummary late = lateness.summary();
-  const DistributionSummary transport = commands.transport_latency();
   json["twin"] = {{"ticks", stats.ticks},
                   {"late_ticks", stats.late_ticks},
                   {"skipped_ticks", stats.skipped_ticks},
                   {"wakeup_lateness_us", summary_json(late)},
-                  {"commands_received", commands.commands_received()},
                   {"commands_applied", stats.commands_applied},
                   {"stale_ticks", stats.stale_ticks},
                   {"controller_lost", controller_lost},
                   {"frames_published", stats.frames_published},
-                  {"publish_failures", stats.publish_failures},
-                  {"command_transport_us", summary_json(transport)}};
+                  {"publish_failures", stats.publish_failures}};
+  link->report(json["twin"]);
 
   const TruthTally& t = kpis.truth;
   std::printf("twin %s, seed %llu, %.1f s fed, %.1f s line time in %.1f s wall\n",
@@ -264,10 +424,9 @@ int twin_serve_command(const TwinServeArgs& args) {
               static_cast<unsigned long long>(stats.ticks),
               static_cast<unsigned long long>(stats.late_ticks),
               static_cast<double>(late.p99_ns) / 1e3, static_cast<double>(late.max_ns) / 1e3);
-  std::printf("commands        %llu received, command transport p50 %.1f us p99 %.1f us\n",
-              static_cast<unsigned long long>(commands.commands_received()),
-              static_cast<double>(transport.p50_ns) / 1e3,
-              static_cast<double>(transport.p99_ns) / 1e3);
+  std::printf("commands        %llu applied; %s\n",
+              static_cast<unsigned long long>(stats.commands_applied),
+              link->command_summary().c_str());
   std::fflush(stdout);
 
   if (!args.json_path.empty() && !write_json_option(args.json_path, json)) return 1;

@@ -5,6 +5,10 @@
 //   linectl control --duration D [--json control.json] [--ledger ledger.csv]
 //       the real ScanRuntime and LineController on DDS only; exits with the ledger summary
 // Both take --domain (the DDS domain id; CYCLONEDDS_URI chooses the configuration).
+// With --can IFACE both meet on a CAN bus instead, as on the line: the controller's CANopen
+// master drives the twin's emulated CiA 402 drives and CiA 401 I/O modules (config/can.yaml),
+// and only the cameras' estimates (and the controller's telemetry) stay on DDS. Without a
+// twin, `linectl control --can can0` runs the line's real devices.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -24,6 +28,8 @@ struct TwinServeArgs {
   std::string wait = "30s";   // how long to wait for a controller before giving up
   std::string drain = "60s";  // longest run after the feeding time (as linectl run --realtime)
   int fifo_priority = 0;      // 1..99: SCHED_FIFO for the tick loop; 0: SCHED_OTHER
+  std::string can_interface;  // set: the devices on this SocketCAN interface, not DDS topics
+  std::string can_config;     // default can.yaml
 };
 
 struct ControlArgs {
@@ -37,6 +43,8 @@ struct ControlArgs {
   int fifo_priority = 0;
   bool lock_memory = false;
   int cpu_dma_latency_us = -1;
+  std::string can_interface;  // set: drives and I/O through the CANopen master on it
+  std::string can_config;     // default can.yaml
 };
 
 CLI::App* add_twin_subcommand(CLI::App& app, TwinServeArgs& args);

@@ -17,6 +17,7 @@
 #include "fl/vision/fillet_estimator.hpp"
 #include "fl/vision/record/recording.hpp"
 #include "fl/vision/record/replay.hpp"
+#include "vision_options.hpp"
 
 namespace fl::apps {
 namespace {

@@ -7,7 +7,7 @@
 # peer: the test binary starts it from /opt/candump (with no arguments the recipe's own run
 # of it just prints its usage and exits 0).
 #
-#   drivers/tests/run_vcan_tests.sh [path/to/drivers_vcan_tests]
+#   drivers/tests/run_vcan_tests.sh [path/to/drivers_vcan_tests | path/to/can_two_process_smoke]
 #   FL_VCAN_WORK=dir   scratch dir for the kernel cache and the initramfs
 #                      (default: build/h-drivers/drivers/vcan_work; never inside ../shared,
 #                      which is read-only in CI)

@@ -25,6 +25,7 @@
 #include <thread>
 #include <vector>
 
+#include "candump_peer.hpp"
 #include "embedded_config.hpp"
 #include "fl/controller/config_loader.hpp"
 #include "fl/drivers/can_config.hpp"
@@ -38,8 +39,6 @@ namespace fl::drivers {
 namespace {
 
 constexpr const char* kInterface = "vcan0";
-constexpr const char* kCandump = "/opt/candump";
-constexpr const char* kCandumpLog = "/tmp/candump.log";
 
 std::int64_t now_ns() {
   timespec now{};
@@ -105,56 +104,6 @@ class DeviceThread {
   std::thread thread_;
 };
 
-class Candump {
- public:
-  Candump() {
-    if (access(kCandump, X_OK) != 0) {
-      return;
-    }
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, kCandumpLog,
-                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    char arg0[] = "candump";
-    char arg1[] = "-L";
-    char arg2[] = "vcan0";
-    char* argv[] = {arg0, arg1, arg2, nullptr};
-    if (posix_spawn(&pid_, kCandump, &actions, nullptr, argv, environ) != 0) {
-      pid_ = -1;
-    }
-    posix_spawn_file_actions_destroy(&actions);
-    usleep(200'000);  // candump binds its socket before the test sends
-  }
-  [[nodiscard]] bool running() const { return pid_ > 0; }
-  // Stops candump and returns its log lines ("(stamp) vcan0 080#").
-  std::vector<std::string> finish() {
-    std::vector<std::string> lines;
-    if (pid_ <= 0) {
-      return lines;
-    }
-    usleep(100'000);
-    kill(pid_, SIGINT);
-    int status = 0;
-    waitpid(pid_, &status, 0);
-    pid_ = -1;
-    std::ifstream log(kCandumpLog);
-    for (std::string line; std::getline(log, line);) {
-      lines.push_back(line);
-    }
-    return lines;
-  }
-  ~Candump() { finish(); }
-
- private:
-  pid_t pid_ = -1;
-};
-
-std::size_t count_frames(const std::vector<std::string>& lines, const std::string& needle) {
-  return static_cast<std::size_t>(std::count_if(
-      lines.begin(), lines.end(),
-      [&](const std::string& line) { return line.find(needle) != std::string::npos; }));
-}
-
 class Vcan : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -218,7 +167,7 @@ TEST_F(Vcan, FullReceiveQueueIsCountedNotBlocking) {
 }
 
 TEST_F(Vcan, MasterStartsEmulatedLineCommandsItAndDetectsALostNode) {
-  Candump candump;
+  test::Candump candump;
   const CanConfig config = embedded_config();
   DeviceThread devices(config);
   SocketCanBus bus(SocketCanOptions{kInterface, {}, true, false, 1 << 20});
@@ -309,10 +258,10 @@ TEST_F(Vcan, MasterStartsEmulatedLineCommandsItAndDetectsALostNode) {
     const std::vector<std::string> lines = candump.finish();
     // The independent peer saw the master's NMT reset-all (000#8100), SYNCs (080#) and the
     // guide's RPDO1 with controlword 0x000F and 2500 = 0x09C4 (205#0F00C4090000).
-    EXPECT_GE(count_frames(lines, " 000#8100"), 1U);
-    EXPECT_GE(count_frames(lines, " 080#"), 50U);
-    EXPECT_GE(count_frames(lines, " 205#0F00C4090000"), 20U);
-    EXPECT_GE(count_frames(lines, " 702#05"), 1U);  // the takt drive's heartbeat, recovered
+    EXPECT_GE(test::count_frames(lines, " 000#8100"), 1U);
+    EXPECT_GE(test::count_frames(lines, " 080#"), 50U);
+    EXPECT_GE(test::count_frames(lines, " 205#0F00C4090000"), 20U);
+    EXPECT_GE(test::count_frames(lines, " 702#05"), 1U);  // the takt drive's heartbeat, recovered
     std::printf("VCAN: candump recorded %zu frames\n", lines.size());
   } else {
     std::printf("VCAN: candump not in the guest: frames not cross-checked\n");

@@ -1,0 +1,231 @@
+// The two-process closed loop over a real kernel CAN stack (issue 5, "Testing against real
+// stacks"): `control --can vcan0` and `twin serve --plant fast --can vcan0` as two processes
+// inside the qemu guest that drivers/tests/run_vcan_tests.sh boots. The controller's CANopen
+// master starts up, configures and drives the twin's emulated CiA 402 drives and CiA 401 I/O
+// modules over SocketCAN; the cameras' estimates come over Cyclone DDS on the guest's
+// loopback. candump (/opt/candump) records the bus as an independent peer.
+//
+// One self-contained binary, because the guest has no project tree and 256 MB of memory:
+// with arguments it is linectl's `control` and `twin serve` (the same code,
+// fl_linectl_two_process, without linectl's vision and its OpenCV); with none, as the
+// guest's init runs it, it writes the embedded configuration to /tmp and runs the tests,
+// starting itself twice. Not run on the host: its kernel has no CAN.
+#include <gtest/gtest.h>
+#include <net/if.h>
+#include <signal.h>
+#include <spdlog/spdlog.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "can_smoke_files.hpp"
+#include "candump_peer.hpp"
+#include "process_support.hpp"
+#include "two_process.hpp"
+
+namespace fl {
+namespace {
+
+namespace fs = std::filesystem;
+using hil::load;
+using hil::spawn;
+using hil::text;
+
+constexpr const char* kInterface = "vcan0";
+const fs::path kWorkDir = "/tmp/can_smoke";
+// 20 s of feeding: some 20 fillets at the design rate of 60 per minute, enough to see them
+// flipped, centred and placed through the bus, and short enough for the emulated guest CPU.
+constexpr const char* kDuration = "20s";
+// The longest a process may run: 20 s of feeding, the drain (the last fillet's way to the
+// outfeed, under 30 s), start-up, and a factor of two for the emulated CPU.
+constexpr auto kRunLimit = std::chrono::seconds(150);
+
+// The guest's init brings up vcan0 but not the loopback interface Cyclone's configuration
+// names: up it here (as root in the guest).
+bool bring_up_loopback() {
+  const int fd = socket(AF_INET, SOCK_DGRAM, 0);
+  if (fd < 0) return false;
+  ifreq request{};
+  std::strncpy(request.ifr_name, "lo", IFNAMSIZ - 1);
+  bool ok = ioctl(fd, SIOCGIFFLAGS, &request) == 0;
+  if (ok && (request.ifr_flags & IFF_UP) == 0) {
+    request.ifr_flags = static_cast<short>(request.ifr_flags | IFF_UP);
+    ok = ioctl(fd, SIOCSIFFLAGS, &request) == 0;
+  }
+  close(fd);
+  return ok;
+}
+
+void write_file(const fs::path& path, const char* contents) {
+  std::ofstream out(path);
+  out << contents;
+  ASSERT_TRUE(out.good()) << path;
+}
+
+// The exit code, or -1 after killing a process that ran past `limit`.
+int wait_exit_within(pid_t pid, std::chrono::seconds limit) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  int status = 0;
+  while (waitpid(pid, &status, WNOHANG) == 0) {
+    if (std::chrono::steady_clock::now() > deadline) {
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      return -1;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return hil::exit_code(status);
+}
+
+class CanTwoProcess : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    fs::create_directories(kWorkDir / "config");
+    write_file(kWorkDir / "config" / "line.yaml", test::kLineYamlText);
+    write_file(kWorkDir / "config" / "can.yaml", test::kCanYamlText);
+    write_file(kWorkDir / "config" / "plant_fast.yaml", test::kPlantFastYamlText);
+    write_file(kWorkDir / "config" / "cyclonedds.xml", test::kCycloneLoopbackXml);
+  }
+  void SetUp() override {
+    if (if_nametoindex(kInterface) == 0) GTEST_FAIL() << kInterface << " missing: run in the guest";
+    ASSERT_TRUE(bring_up_loopback()) << "lo: " << std::strerror(errno);
+  }
+  // The children find the configuration through the product's own search path.
+  static std::vector<std::string> environment() {
+    return {"FL_CONFIG_DIR=" + (kWorkDir / "config").string(),
+            "CYCLONEDDS_URI=file://" + (kWorkDir / "config" / "cyclonedds.xml").string()};
+  }
+  static std::string self() { return fs::read_symlink("/proc/self/exe").string(); }
+};
+
+TEST_F(CanTwoProcess, ControlAndTwinRunTheLineOverVcan) {
+  const fs::path dir = kWorkDir / "run";
+  fs::create_directories(dir);
+  drivers::test::Candump candump((dir / "candump.log").string());
+  const bool peer = candump.running();
+
+  const pid_t twin =
+      spawn({self(), "twin", "serve", "--plant", "fast", "--seed", "1", "--can", kInterface,
+             "--duration", kDuration, "--wait", "60s", "--json", (dir / "twin.json").string()},
+            dir / "twin.log", environment());
+  const pid_t control = spawn({self(), "control", "--can", kInterface, "--duration", kDuration,
+                               "--wait", "60s", "--json", (dir / "control.json").string()},
+                              dir / "control.log", environment());
+  const int control_exit = wait_exit_within(control, kRunLimit);
+  const int twin_exit = wait_exit_within(twin, kRunLimit);
+  const std::vector<std::string> frames = candump.finish();
+  const std::string logs =
+      "--- control\n" + text(dir / "control.log") + "--- twin\n" + text(dir / "twin.log");
+  std::printf("%s", logs.c_str());
+  ASSERT_EQ(control_exit, 0) << logs;
+  ASSERT_EQ(twin_exit, 0) << logs;
+
+  const nlohmann::json control_kpis = load(dir / "control.json");
+  const nlohmann::json twin_kpis = load(dir / "twin.json");
+  // Both books balance, and fillets went all the way through: flipped, centred, placed.
+  EXPECT_TRUE(control_kpis["ledger"]["balanced"].get<bool>());
+  EXPECT_EQ(control_kpis["ledger"]["records_dropped"].get<int>(), 0);
+  EXPECT_TRUE(twin_kpis["truth"]["balanced"].get<bool>());
+  EXPECT_GT(twin_kpis["truth"]["outfeed"].get<int>(), 0);
+  EXPECT_EQ(twin_kpis["truth"]["on_line_at_end"].get<int>(), 0);
+  // The two books agree: the controller's items are the fillets the twin fed, tracked through
+  // the bus's beams and encoders (a touching pair is one item), and what it placed left the
+  // twin's outfeed.
+  const int items = control_kpis["ledger"]["items_created"].get<int>();
+  const int placed = control_kpis["ledger"]["outcomes"]["placed"].get<int>();
+  EXPECT_GT(items, 0);
+  EXPECT_LE(items, twin_kpis["truth"]["fed"].get<int>());
+  EXPECT_GT(placed, 0);
+  EXPECT_LE(placed, twin_kpis["truth"]["outfeed"].get<int>());
+  EXPECT_EQ(control_kpis["runtime"]["fault"].get<std::string>(), "none");
+  EXPECT_FALSE(control_kpis["runtime"]["line_faulted"].get<bool>());
+  // The bus: no frame the master could not place, none refused, no node lost.
+  const nlohmann::json& can = control_kpis["can"];
+  EXPECT_GT(can["syncs_sent"].get<int>(), 0);
+  EXPECT_EQ(can["malformed_frames"].get<int>(), 0);
+  EXPECT_EQ(can["unknown_cob_id"].get<int>(), 0);
+  EXPECT_EQ(can["nodes_lost"].get<int>(), 0);
+  EXPECT_EQ(can["error_state"].get<std::string>(), "error active");
+  EXPECT_GT(twin_kpis["twin"]["can"]["syncs_received"].get<int>(), 0);
+  EXPECT_GT(control_kpis["dds"]["estimate_to_command_us"]["count"].get<int>(), 0);
+
+  if (peer) {
+    // The independent peer saw every SYNC the master counted (candump ran before the master
+    // started and after it ended), and the drives' heartbeats (0x700 + node id).
+    EXPECT_EQ(drivers::test::count_frames(frames, " 080#"), can["syncs_sent"].get<std::size_t>());
+    EXPECT_GE(drivers::test::count_frames(frames, " 702#05"), 1U);
+    std::printf("CAN_SMOKE: candump recorded %zu frames\n", frames.size());
+  } else {
+    std::printf("CAN_SMOKE: candump not in the guest: frames not cross-checked\n");
+  }
+  std::printf("CAN_SMOKE: %s\n", control_kpis.dump().c_str());
+}
+
+// A twin that dies mid-run is every device going silent at once: the master's heartbeat
+// consumer loses each node within its timeout, the line faults and stops, and the ledger
+// closes what was on the belts as lost, nothing dropped (exit 4: the peer was lost).
+TEST_F(CanTwoProcess, ControllerFaultsWhenTheDevicesFallSilent) {
+  const fs::path dir = kWorkDir / "devices_lost";
+  fs::create_directories(dir);
+  const pid_t twin = spawn({self(), "twin", "serve", "--plant", "fast", "--seed", "1", "--can",
+                            kInterface, "--duration", "60s", "--wait", "60s"},
+                           dir / "twin.log", environment());
+  const pid_t control = spawn({self(), "control", "--can", kInterface, "--duration", "60s",
+                               "--wait", "60s", "--json", (dir / "control.json").string()},
+                              dir / "control.log", environment());
+  // Fillets on the belts first: 8 s of scanning puts the first ones past the takt beam.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (text(dir / "control.log").find("scanning") == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  std::this_thread::sleep_for(std::chrono::seconds(8));
+  kill(twin, SIGKILL);
+  EXPECT_EQ(wait_exit_within(twin, kRunLimit), 128 + SIGKILL);
+  const int control_exit = wait_exit_within(control, kRunLimit);
+  const std::string logs = "--- control\n" + text(dir / "control.log");
+  std::printf("%s", logs.c_str());
+  ASSERT_EQ(control_exit, 4) << logs;
+
+  const nlohmann::json result = load(dir / "control.json");
+  EXPECT_TRUE(result["runtime"]["line_faulted"].get<bool>());
+  EXPECT_GT(result["can"]["nodes_lost"].get<int>(), 0);
+  EXPECT_TRUE(result["ledger"]["balanced"].get<bool>());
+  EXPECT_EQ(result["ledger"]["records_dropped"].get<int>(), 0);
+  EXPECT_GT(result["ledger"]["items_created"].get<int>(), 0);
+}
+
+}  // namespace
+}  // namespace fl
+
+int main(int argc, char** argv) {
+  if (argc > 1 && (std::strcmp(argv[1], "control") == 0 || std::strcmp(argv[1], "twin") == 0)) {
+    CLI::App app{"linectl's two-process commands, for the CAN smoke test in the qemu guest"};
+    app.require_subcommand(1);
+    fl::apps::TwinServeArgs twin_args;
+    CLI::App* twin = fl::apps::add_twin_subcommand(app, twin_args);
+    fl::apps::ControlArgs control_args;
+    CLI::App* control = fl::apps::add_control_subcommand(app, control_args);
+    CLI11_PARSE(app, argc, argv);
+    try {
+      if (control->parsed()) return fl::apps::control_command(control_args);
+      if (twin->parsed()) return fl::apps::twin_serve_command(twin_args);
+    } catch (const std::exception& error) {
+      spdlog::error("{}", error.what());
+      return 1;
+    }
+    return 2;
+  }
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
