@@ -87,6 +87,17 @@ int wait_exit_within(pid_t pid, std::chrono::seconds limit) {
   return hil::exit_code(status);
 }
 
+// Waits for the controller's scan to start (its log says so), then 8 s more: the first
+// fillets are then past the takt beam, on the belts.
+void wait_for_scanning(const fs::path& control_log) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (text(control_log).find("scanning") == std::string::npos &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  std::this_thread::sleep_for(std::chrono::seconds(8));
+}
+
 class CanTwoProcess : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -183,13 +194,7 @@ TEST_F(CanTwoProcess, ControllerFaultsWhenTheDevicesFallSilent) {
   const pid_t control = spawn({self(), "control", "--can", kInterface, "--duration", "60s",
                                "--wait", "60s", "--json", (dir / "control.json").string()},
                               dir / "control.log", environment());
-  // Fillets on the belts first: 8 s of scanning puts the first ones past the takt beam.
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
-  while (text(dir / "control.log").find("scanning") == std::string::npos &&
-         std::chrono::steady_clock::now() < deadline) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  }
-  std::this_thread::sleep_for(std::chrono::seconds(8));
+  wait_for_scanning(dir / "control.log");
   kill(twin, SIGKILL);
   EXPECT_EQ(wait_exit_within(twin, kRunLimit), 128 + SIGKILL);
   const int control_exit = wait_exit_within(control, kRunLimit);
@@ -203,6 +208,34 @@ TEST_F(CanTwoProcess, ControllerFaultsWhenTheDevicesFallSilent) {
   EXPECT_TRUE(result["ledger"]["balanced"].get<bool>());
   EXPECT_EQ(result["ledger"]["records_dropped"].get<int>(), 0);
   EXPECT_GT(result["ledger"]["items_created"].get<int>(), 0);
+}
+
+// A controller that dies mid-run stops sending SYNC: the twin's drives stop on the safe
+// output image within 100 ms, as a drive's command timeout would, and the twin reports the
+// controller lost (exit 4) with every fillet it fed accounted for.
+TEST_F(CanTwoProcess, TwinStopsTheBeltsWhenTheMasterFallsSilent) {
+  const fs::path dir = kWorkDir / "master_lost";
+  fs::create_directories(dir);
+  const pid_t twin =
+      spawn({self(), "twin", "serve", "--plant", "fast", "--seed", "1", "--can", kInterface,
+             "--duration", "60s", "--wait", "60s", "--json", (dir / "twin.json").string()},
+            dir / "twin.log", environment());
+  const pid_t control =
+      spawn({self(), "control", "--can", kInterface, "--duration", "60s", "--wait", "60s"},
+            dir / "control.log", environment());
+  wait_for_scanning(dir / "control.log");
+  kill(control, SIGKILL);
+  EXPECT_EQ(wait_exit_within(control, kRunLimit), 128 + SIGKILL);
+  const int twin_exit = wait_exit_within(twin, kRunLimit);
+  const std::string logs = "--- twin\n" + text(dir / "twin.log");
+  std::printf("%s", logs.c_str());
+  ASSERT_EQ(twin_exit, 4) << logs;
+
+  const nlohmann::json result = load(dir / "twin.json");
+  EXPECT_TRUE(result["twin"]["controller_lost"].get<bool>());
+  EXPECT_GT(result["twin"]["stale_ticks"].get<int>(), 0);
+  EXPECT_TRUE(result["truth"]["balanced"].get<bool>());
+  EXPECT_GT(result["truth"]["on_line_at_end"].get<int>(), 0);  // stopped, not emptied
 }
 
 }  // namespace
