@@ -49,11 +49,12 @@ bool frame_intact(CameraId camera, const CameraFrame& frame) {
   return true;
 }
 
-bool wait_until(const std::function<bool()>& done, std::chrono::milliseconds timeout) {
+bool wait_until(const std::function<bool()>& done, std::chrono::milliseconds timeout,
+                std::chrono::milliseconds poll) {
   const auto end = std::chrono::steady_clock::now() + timeout;
   while (!done()) {
     if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    std::this_thread::sleep_for(poll);
   }
   return true;
 }

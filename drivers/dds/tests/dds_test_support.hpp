@@ -22,7 +22,8 @@ CameraFrame make_frame(CameraId camera, std::uint32_t sequence, std::int64_t fra
 bool frame_intact(CameraId camera, const CameraFrame& frame);
 
 // Polls `done` every millisecond until it is true or `timeout` passed.
-bool wait_until(const std::function<bool()>& done, std::chrono::milliseconds timeout);
+bool wait_until(const std::function<bool()>& done, std::chrono::milliseconds timeout,
+                std::chrono::milliseconds poll = std::chrono::milliseconds(1));
 
 // A child process running drivers_dds_peer with `args`, its stdout captured; killed
 // (SIGKILL) and reaped on destruction if still running.

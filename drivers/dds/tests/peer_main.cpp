@@ -3,7 +3,8 @@
 //
 //   drivers_dds_peer publish DOMAIN CAMERA PERIOD_MS FRAMES AFTER
 //     waits up to 10 s for a reader, publishes FRAMES frames (0: until killed) of
-//     make_frame() every PERIOD_MS, then AFTER = exit (clean shutdown) | hang (stays alive,
+//     make_frame() every PERIOD_MS (0: with no pause, a flooding camera node, offering the
+//     slowest camera's deadline), then AFTER = exit (clean shutdown) | hang (stays alive,
 //     silent: the reader's deadline passes while liveliness holds).
 //   drivers_dds_peer subscribe DOMAIN SECONDS
 //     reads estimates for SECONDS and prints "accepted=N matched=M".
@@ -39,7 +40,8 @@ int publish(dds_domainid_t domain, int camera, int period_ms, long frames,
   }
   std::optional<dds::DdsCameraPublisher> publisher;
   try {
-    publisher.emplace(*participant, static_cast<std::int64_t>(period_ms) * 1'000'000);
+    publisher.emplace(*participant, period_ms > 0 ? static_cast<std::int64_t>(period_ms) * 1'000'000
+                                                  : dds::kSlowestCameraPeriodNs);
   } catch (const dds::DdsError& e) {
     std::printf("writer refused: %s\n", e.what());
     std::fflush(stdout);

@@ -1,10 +1,11 @@
 // Two real processes over loopback: the test is the controller's side (DdsCameraInput), a
 // forked drivers_dds_peer is the camera node. Estimates arrive intact; a peer that stops
 // publishing but lives misses the deadline; a peer killed with SIGKILL (no goodbye on the
-// wire) loses liveliness within the lease.
+// wire) loses liveliness within the lease; a flooding peer starves no other camera.
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstdio>
 
 #include "dds_test_support.hpp"
 #include "fl/controller/monotonic_clock.hpp"
@@ -101,6 +102,68 @@ TEST(DdsTwoProcesses, KilledPeerLosesLivelinessWithinTheLease) {
   EXPECT_LT(lost_after_ns, 1'000'000'000);
   EXPECT_TRUE(input.health(CameraId::kPosition).stale());
   EXPECT_EQ(peer.wait_exit(1s), 128 + 9);  // SIGKILL
+}
+
+// A camera node that floods: one peer publishes the multilane-2 camera as fast as it can
+// (no pause between dds_write calls: some 300,000 frames a second on the build VM)
+// while another is the orientation camera at its 40 ms. The defined reaction: keep-last 1
+// per camera keeps only each camera's newest frame, so the flood costs the scan nothing and
+// starves no other camera; the flooded camera's image still moves forward, never back.
+TEST(DdsTwoProcesses, FloodingCameraNodeStarvesNoOtherCamera) {
+  Participant controller(24);
+  DdsCameraInput input(controller);
+  // 50 frames at 40 ms: 2 s of the orientation camera, the flood running throughout.
+  constexpr std::uint32_t kFrames = 50;
+  PeerProcess flood({"publish", "24", "3", "0", "0", "exit"}, loopback_uri());  // until killed
+  const bool flowing =
+      wait_until([&] { return input.health(CameraId::kMultilane2).frames_accepted >= 1000; }, 10s);
+  ASSERT_TRUE(flowing) << "accepted " << input.health(CameraId::kMultilane2).frames_accepted
+                       << ", taken " << input.counters().samples_taken << ", rejected "
+                       << input.counters().rejected_total();
+  PeerProcess orientation({"publish", "24", "0", "40", std::to_string(kFrames), "exit"},
+                          loopback_uri());
+  InputImage in;
+  std::uint32_t orientation_seen = 0;
+  std::uint32_t last_orientation = 0;
+  std::uint32_t last_flood = 0;
+  bool went_back = false;
+  bool orientation_stale_while_running = false;
+  // The scan's 10 ms rhythm, until the last orientation frame is in (or 10 s).
+  const bool complete = wait_until(
+      [&] {
+        input.read(in);
+        const std::uint32_t orientation_sequence =
+            in.cameras[index(CameraId::kOrientation)].sequence;
+        const std::uint32_t flood_sequence = in.cameras[index(CameraId::kMultilane2)].sequence;
+        went_back =
+            went_back || orientation_sequence < last_orientation || flood_sequence < last_flood;
+        if (orientation_sequence != last_orientation) ++orientation_seen;
+        if (orientation_sequence > 0 && orientation_sequence < kFrames &&
+            input.health(CameraId::kOrientation).stale()) {
+          orientation_stale_while_running = true;
+        }
+        last_orientation = orientation_sequence;
+        last_flood = flood_sequence;
+        return orientation_sequence == kFrames;
+      },
+      10s, 10ms);
+  const std::uint64_t flood_frames = input.health(CameraId::kMultilane2).frames_accepted;
+  flood.kill_now();
+  ASSERT_TRUE(complete) << "orientation reached " << last_orientation << " of " << kFrames
+                        << "; flood " << flood.output();
+  EXPECT_EQ(orientation.wait_exit(5s), 0);
+  std::printf("flood: %llu frames taken; orientation: %u of %u frames seen\n",
+              static_cast<unsigned long long>(flood_frames), orientation_seen, kFrames);
+  EXPECT_FALSE(went_back);
+  // Read every 10 ms, a 40 ms camera shows most of its frames; the flood takes none of them
+  // (keep-last per camera). Half is a floor that scheduling on two loaded cores cannot break.
+  EXPECT_GE(orientation_seen, kFrames / 2);
+  EXPECT_FALSE(orientation_stale_while_running);
+  // The flood did flow (far more frames than the orientation camera's) and every taken
+  // sample was valid: nothing rejected, nothing counted as a fault.
+  EXPECT_GT(flood_frames, 10U * kFrames);
+  EXPECT_EQ(input.counters().rejected_total(), 0U);
+  EXPECT_TRUE(test::frame_intact(CameraId::kMultilane2, in.cameras[index(CameraId::kMultilane2)]));
 }
 
 }  // namespace
