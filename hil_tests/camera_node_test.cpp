@@ -220,7 +220,7 @@ TEST_F(CameraNode, ServesPastAnUnreadableImageAndReportsAWrongSizeAsNoFillet) {
       cv::Mat half;
       cv::resize(frames_with_fillets[0], half, {}, 0.5, 0.5, cv::INTER_AREA);
       cv::imwrite((images / name).string(), half);
-      expected[sequence] = CameraFrame{};  // no fillet: the estimator refuses the frame
+      // The estimator refuses the frame: not published, its sequence a gap (not "no fillet").
     } else {
       cv::imwrite((images / name).string(), frames_with_fillets[next_good]);
       expected[sequence] = measure_in_process(estimator, frames_with_fillets[next_good], sequence);
@@ -242,18 +242,21 @@ TEST_F(CameraNode, ServesPastAnUnreadableImageAndReportsAWrongSizeAsNoFillet) {
   ASSERT_EQ(received.node_exit, 0) << log;
   EXPECT_NE(log.find("002.png"), std::string::npos) << "the unreadable file is not named:\n" << log;
   EXPECT_EQ(received.frames.count(3), 0U) << "the unreadable file's slot must stay a gap";
+  EXPECT_EQ(received.frames.count(6), 0U) << "the refused frame's slot must stay a gap";
   for (const auto& [sequence, frame] : received.frames) {
     ASSERT_EQ(expected.count(sequence), 1U) << "sequence " << sequence << " was never served";
     expect_same_estimates(frame, expected.at(sequence));
   }
-  // 7 frames at 40 ms polled every millisecond: each that the node served arrives. A loaded
-  // machine may make it drop one as late (counted); the exact statuses hold when none was.
+  // 7 frames at 40 ms polled every millisecond, one refused: each of the other 6 that the
+  // node served arrives. A loaded machine may make it drop one as late (counted); the exact
+  // statuses hold when none was.
   const nlohmann::json stats = load(dir / "node.json");
   const auto dropped = stats["frames_dropped_late"].get<std::size_t>();
   EXPECT_EQ(stats["frames_read"].get<std::size_t>(), 7U);
   EXPECT_EQ(stats["frames_unreadable"].get<int>(), 1);
-  EXPECT_EQ(received.frames.size(), 7U - dropped);
+  EXPECT_EQ(received.frames.size(), 6U - dropped);
   if (dropped == 0) {
+    EXPECT_EQ(stats["frames_refused"].get<int>(), 1);
     EXPECT_NE(log.find("wrong resolution"), std::string::npos) << log;
     EXPECT_EQ(stats["frame_status"]["wrong resolution"].get<int>(), 1);
     EXPECT_EQ(stats["frame_status"]["ok"].get<int>(), 6);

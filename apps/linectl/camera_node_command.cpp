@@ -50,6 +50,7 @@ struct NodeStats {
   std::uint64_t frames_read = 0;
   std::uint64_t frames_published = 0;
   std::uint64_t frames_unreadable = 0;    // the source could not deliver them (logged)
+  std::uint64_t frames_refused = 0;       // the estimator refused them: not published
   std::uint64_t frames_dropped_late = 0;  // due before the node was done with the previous
   std::uint64_t publish_failures = 0;
   std::uint64_t fillets_published = 0;
@@ -127,6 +128,7 @@ nlohmann::json stats_json(const CameraServeArgs& args, const NodeStats& stats,
           {"frames_read", stats.frames_read},
           {"frames_published", stats.frames_published},
           {"frames_unreadable", stats.frames_unreadable},
+          {"frames_refused", stats.frames_refused},
           {"frames_dropped_late", stats.frames_dropped_late},
           {"publish_failures", stats.publish_failures},
           {"fillets_published", stats.fillets_published},
@@ -287,18 +289,22 @@ int camera_serve_command(const CameraServeArgs& args) {
     const vision::FrameResult result = estimator->estimate(frame->bgr, exposure_ns, sequence);
     estimate_time.record(monotonic_now_ns() - estimate_start_ns);
     ++stats.frame_status[std::string(vision::to_string(result.status))];
-    if (result.status != vision::FrameStatus::kOk) {
-      spdlog::warn("camera {}: {}: {} ({})", args.camera, frame->origin,
+    if (!result.deliverable()) {
+      // Not "no fillet": the frame shows nothing of the belt. Its sequence stays a gap; a
+      // camera that keeps refusing misses its DDS deadline and the controller's silence limit.
+      ++stats.frames_refused;
+      spdlog::warn("camera {}: {}: {} ({}); not published", args.camera, frame->origin,
                    vision::to_string(result.status), result.message);
-    }
-    const CameraFrame estimates = result.to_camera_frame();
-    try {
-      publisher.publish(*camera, estimates);
-      ++stats.frames_published;
-      stats.fillets_published += estimates.count;
-    } catch (const std::exception& error) {
-      ++stats.publish_failures;
-      spdlog::error("camera {}: frame {} not published: {}", args.camera, sequence, error.what());
+    } else {
+      const CameraFrame estimates = result.to_camera_frame();
+      try {
+        publisher.publish(*camera, estimates);
+        ++stats.frames_published;
+        stats.fillets_published += estimates.count;
+      } catch (const std::exception& error) {
+        ++stats.publish_failures;
+        spdlog::error("camera {}: frame {} not published: {}", args.camera, sequence, error.what());
+      }
     }
     const std::int64_t now_ns = monotonic_now_ns();
     lateness.record(now_ns - exposure_ns);
@@ -319,11 +325,12 @@ int camera_serve_command(const CameraServeArgs& args) {
   const DistributionSummary lateness_summary = lateness.summary();
   std::printf(
       "camera %s: %llu frames read, %llu published (%llu fillets), %llu unreadable, "
-      "%llu dropped late, in %.1f s\n",
+      "%llu refused, %llu dropped late, in %.1f s\n",
       args.camera.c_str(), static_cast<unsigned long long>(stats.frames_read),
       static_cast<unsigned long long>(stats.frames_published),
       static_cast<unsigned long long>(stats.fillets_published),
       static_cast<unsigned long long>(stats.frames_unreadable),
+      static_cast<unsigned long long>(stats.frames_refused),
       static_cast<unsigned long long>(stats.frames_dropped_late), wall_s);
   std::printf(
       "estimate        p50 %.0f us, p99 %.0f us, max %.0f us; exposure to publish p99 "

@@ -215,7 +215,11 @@ int record_twin(const RecordArgs& args, double duration_s) {
         }
         writer.write_frame(rig.camera, sequence, in.time_ns, frame.bgr);
         writer.write_truth(rig.camera, sequence, in.time_ns, rig.source->last_truth());
-        rig.in_flight.emplace_back(in.time_ns + latency_ns, result.to_camera_frame());
+        // A refused frame is recorded (replay measures it again) but, as from a camera node,
+        // not delivered to the controller.
+        if (result.deliverable()) {
+          rig.in_flight.emplace_back(in.time_ns + latency_ns, result.to_camera_frame());
+        }
         rig.next_exposure_ns += rig.period_ns;
       }
       while (!rig.in_flight.empty() && rig.in_flight.front().first <= in.time_ns) {

@@ -40,7 +40,8 @@ TEST(BadInput, WrongResolutionNamesBothSizes) {
   EXPECT_NE(result.message.find("640 x 480"), std::string::npos) << result.message;
 }
 
-// A covered lens (black), a grey wall, random noise, a blown-out frame: none looks like the belt.
+// A covered lens (black), a grey wall, random noise, a blown-out frame: none looks like the
+// belt, and none goes to the controller (not "no fillet": the camera saw nothing of the belt).
 TEST(BadInput, NoBelt) {
   auto estimator = make_estimator();
   cv::Mat noise(480, 640, CV_8UC3);
@@ -51,6 +52,7 @@ TEST(BadInput, NoBelt) {
     const auto result = estimator.estimate(image, 0, 0);
     EXPECT_EQ(result.status, FrameStatus::kNoBelt);
     EXPECT_EQ(result.to_camera_frame().count, 0);
+    EXPECT_FALSE(result.deliverable());
   }
 }
 
@@ -65,6 +67,7 @@ TEST(BadInput, EmptyBeltGivesNoFillet) {
   const auto result = estimator.estimate(frame.bgr, 0, 0);
   EXPECT_EQ(result.status, FrameStatus::kOk) << result.message;
   EXPECT_EQ(result.to_camera_frame().count, 0);
+  EXPECT_TRUE(result.deliverable());  // an empty belt is news: no fillet
 }
 
 // Fillets cut by the image border are reported as cut, with no estimate; the fully visible one

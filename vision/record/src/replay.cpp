@@ -286,8 +286,10 @@ ReplayResult replay(const Recording& recording, const ReplayOptions& options) {
         continue;
       }
       const FrameResult& measured = measurer.get(next_job++);
-      current[c] = measured.to_camera_frame();
-      if (!same_frame(current[c], recorded.frame)) ++result.frames_differing_from_recording;
+      // As live: a refused frame does not reach the controller (FrameResult::deliverable()).
+      const CameraFrame estimates = measured.to_camera_frame();
+      if (measured.deliverable()) current[c] = estimates;
+      if (!same_frame(estimates, recorded.frame)) ++result.frames_differing_from_recording;
       result.entries.push_back(frame_entry(recorded.camera, measured.frame_time_ns, measured));
       ++result.frames;
     }

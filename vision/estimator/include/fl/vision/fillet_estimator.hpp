@@ -140,6 +140,11 @@ struct FrameResult {
   // The controller's view: the kFillet blobs (at most kMaxEstimatesPerFrame), time and
   // sequence passed through; count 0 for a frame that is not kOk.
   [[nodiscard]] CameraFrame to_camera_frame() const;
+  // Whether the frame goes to the controller at all: only when kOk. A refused frame (no
+  // belt in view, wrong size or type) says nothing about what is on the belt, so it is not
+  // passed on as "no fillet": its sequence stays a gap, and a camera that keeps refusing
+  // falls silent, which the controller faults as kCameraSilent (docs/vision.md).
+  [[nodiscard]] bool deliverable() const { return status == FrameStatus::kOk; }
 };
 
 class FilletEstimator {
