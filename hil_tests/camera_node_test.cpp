@@ -43,6 +43,7 @@ using hil::wait_exit;
 constexpr int kDomainRecording = 53;
 constexpr int kDomainImages = 54;
 constexpr int kDomainNoReader = 55;
+constexpr int kDomainCovered = 57;
 // Longest a node may run before the test gives up on it: the recording is 12 s of frames,
 // served at twice its pace (6 s), plus start-up and the wait for discovery.
 constexpr auto kNodeLimit = std::chrono::seconds(60);
@@ -64,6 +65,7 @@ struct Received {
   std::map<std::uint32_t, CameraFrame> frames;  // by sequence
   dds::IntakeCounters counters;
   int node_exit = -1;
+  bool deadline_missed_while_running = false;  // the camera went stale with the node alive
 };
 
 Received receive_while_running(dds::DdsCameraInput& input, pid_t node) {
@@ -84,6 +86,9 @@ Received receive_while_running(dds::DdsCameraInput& input, pid_t node) {
       break;
     }
     take();
+    if (input.health(CameraId::kOrientation).deadline_missed) {
+      received.deadline_missed_while_running = true;
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   take();  // the last frame, acknowledged before the node exited
@@ -186,7 +191,20 @@ TEST_F(CameraNode, PublishesWhatTheInProcessEstimatorMeasures) {
   EXPECT_EQ(stats["frames_unreadable"].get<int>(), 0);
 }
 
-TEST_F(CameraNode, ServesPastAnUnreadableImageAndReportsAWrongSizeAsNoFillet) {
+// The recording's last `count` frames with a fillet in view, in recording order.
+std::vector<cv::Mat> last_frames_with_fillets(const rec::RecordedCamera& camera,
+                                              vision::FilletEstimator& estimator,
+                                              std::size_t count) {
+  std::vector<cv::Mat> frames;
+  for (auto it = camera.frames.rbegin(); it != camera.frames.rend() && frames.size() < count;
+       ++it) {
+    const cv::Mat bgr = rec::decode_frame(it->second);
+    if (measure_in_process(estimator, bgr, it->first).count > 0) frames.insert(frames.begin(), bgr);
+  }
+  return frames;
+}
+
+TEST_F(CameraNode, ServesPastAnUnreadableImageAndWithholdsAWrongSizeFrame) {
   const fs::path dir = fresh_dir("images");
   const fs::path images = dir / "images";
   fs::create_directories(images);
@@ -199,14 +217,7 @@ TEST_F(CameraNode, ServesPastAnUnreadableImageAndReportsAWrongSizeAsNoFillet) {
 
   // Eight files: the recording's last six frames with a fillet in view, and in their midst
   // (files 2 and 5) a file that is not an image and a frame of half the calibrated size.
-  std::vector<cv::Mat> frames_with_fillets;
-  for (auto it = camera.frames.rbegin();
-       it != camera.frames.rend() && frames_with_fillets.size() < 6; ++it) {
-    const cv::Mat bgr = rec::decode_frame(it->second);
-    if (measure_in_process(estimator, bgr, it->first).count > 0) {
-      frames_with_fillets.insert(frames_with_fillets.begin(), bgr);
-    }
-  }
+  const std::vector<cv::Mat> frames_with_fillets = last_frames_with_fillets(camera, estimator, 6);
   ASSERT_EQ(frames_with_fillets.size(), 6U);
   std::map<std::uint32_t, CameraFrame> expected;  // by the sequence the node gives the file
   std::size_t next_good = 0;
@@ -261,6 +272,52 @@ TEST_F(CameraNode, ServesPastAnUnreadableImageAndReportsAWrongSizeAsNoFillet) {
     EXPECT_EQ(stats["frame_status"]["wrong resolution"].get<int>(), 1);
     EXPECT_EQ(stats["frame_status"]["ok"].get<int>(), 6);
   }
+}
+
+// A covered lens mid-run: four frames of the belt, then eight black ones. The node publishes
+// the four and withholds the rest (no belt in view: not "no fillet"), so the controller's
+// reader sees the orientation camera miss its 120 ms deadline while the node still runs,
+// which is the controller's camera-silent fault, naming the camera.
+TEST_F(CameraNode, CoveredLensFallsSilentRatherThanReportingAnEmptyBelt) {
+  const fs::path dir = fresh_dir("covered");
+  const fs::path images = dir / "images";
+  fs::create_directories(images);
+  const rec::Recording recording = rec::load_recording(recording_path());
+  const rec::RecordedCamera& camera =
+      recording.cameras[static_cast<std::size_t>(CameraId::kOrientation)];
+  ASSERT_TRUE(camera.calibration.has_value());
+  vision::save_calibration(dir / "camera.yaml", *camera.calibration);
+  vision::FilletEstimator estimator(*camera.calibration);
+  const std::vector<cv::Mat> belt = last_frames_with_fillets(camera, estimator, 4);
+  ASSERT_EQ(belt.size(), 4U);
+  // 8 frames at 25 Hz: 320 ms without a published frame, well past the 120 ms deadline.
+  constexpr std::uint32_t kCovered = 8;
+  for (std::uint32_t file = 0; file < 4 + kCovered; ++file) {
+    char name[16];
+    std::snprintf(name, sizeof name, "%03u.png", file);
+    const cv::Mat image =
+        file < 4 ? belt[file] : cv::Mat(belt[0].size(), CV_8UC3, cv::Scalar::all(0));
+    cv::imwrite((images / name).string(), image);
+  }
+  dds::Participant controller(kDomainCovered);
+  dds::DdsCameraInput input(controller);
+  const pid_t node = spawn(
+      {FL_LINECTL, "camera", "serve", "--images", images.string(), "--calibration",
+       (dir / "camera.yaml").string(), "--fps", "25", "--domain", std::to_string(kDomainCovered),
+       "--wait", "20s", "--json", (dir / "node.json").string()},
+      dir / "node.log");
+  ASSERT_GT(node, 0);
+  const Received received = receive_while_running(input, node);
+  const std::string log = text(dir / "node.log");
+  ASSERT_EQ(received.node_exit, 0) << log;  // it did publish the belt's frames
+  for (const auto& [sequence, frame] : received.frames) {
+    EXPECT_LE(sequence, 4U) << "a covered-lens frame was published";
+  }
+  EXPECT_TRUE(received.deadline_missed_while_running) << log;
+  const nlohmann::json stats = load(dir / "node.json");
+  EXPECT_EQ(stats["frames_refused"].get<std::uint32_t>(), kCovered);
+  EXPECT_EQ(stats["frame_status"]["no belt in view"].get<std::uint32_t>(), kCovered);
+  EXPECT_NE(log.find("not published"), std::string::npos) << log;
 }
 
 TEST_F(CameraNode, RefusesWhatItCannotServeAndSaysWhy) {
