@@ -13,6 +13,8 @@
 #include "fl/controller/config_loader.hpp"
 #include "fl/controller/line_controller.hpp"
 #include "fl/controller/runtime.hpp"
+#include "fl/drivers/can_config.hpp"
+#include "fl/drivers/line_devices.hpp"
 #include "fl/twin/fast_plant.hpp"
 #include "fl/twin/fast_plant_config.hpp"
 #include "plant_io.hpp"
@@ -50,6 +52,47 @@ class CheckedLogic final : public ScanLogic {
  private:
   LineControllerLogic& logic_;
 };
+
+// The HMI's twin panel behind the bus (`linectl run --realtime --fieldbus canopen --hmi`):
+// PlantIo drives the inner fast plant's switches while the controller sees the plant only
+// through the CANopen master, so a drive trip arrives as the drive's EMCY and a lost camera
+// as frames that stop. Stepped here by hand in simulated time (no runtime: the bus path,
+// not the timing, is under test).
+TEST(RealtimeFaults, TwinSwitchesReachTheControllerThroughTheBus) {
+  const LineConfig line = load_line_config(kConfigDir / "line.yaml");
+  FastPlant fast(line, load_fast_plant_config(kConfigDir / "plant_fast.yaml"));
+  drivers::CanopenPlant bus_plant(fast, drivers::load_can_config(kConfigDir / "can.yaml", line));
+  apps::PlantIo io(bus_plant, 3, &fast);
+  InputImage in;
+  OutputImage out = make_safe_output_image();
+  std::int64_t now_ns = 1'000 * kMs;
+  const auto scan = [&] {
+    now_ns += kPeriodNs;
+    io.read(now_ns, in);
+    io.write(out);
+  };
+  scan();
+  constexpr std::size_t kDrive = index(DriveId::kCentring);
+  ASSERT_FALSE(in.drives[kDrive].fault);
+  io.set_twin_fault(apps::TwinFault::kDriveLost, kDrive, true);
+  // The plant trips in the next step; its drive sends the EMCY at the following SYNC and the
+  // master reads it one scan later: within 3 scans.
+  for (int s = 0; s < 3 && !in.drives[kDrive].fault; ++s) scan();
+  EXPECT_TRUE(in.drives[kDrive].fault);
+  EXPECT_EQ(bus_plant.master().drive_status(DriveId::kCentring).emcy_code,
+            drivers::emulation::LineDevices::kPlantDriveFaultCode);
+
+  // A camera switched silent: its frames (not on the bus) stop advancing.
+  constexpr std::size_t kCamera = index(CameraId::kOrientation);
+  const std::uint32_t before = in.cameras[kCamera].sequence;
+  for (int s = 0; s < 20; ++s) scan();
+  ASSERT_GT(in.cameras[kCamera].sequence, before);  // delivering before the switch
+  io.set_twin_fault(apps::TwinFault::kCameraSilent, kCamera, true);
+  scan();
+  const std::uint32_t frozen = in.cameras[kCamera].sequence;
+  for (int s = 0; s < 20; ++s) scan();  // 200 ms: five frames of a 40 ms camera
+  EXPECT_EQ(in.cameras[kCamera].sequence, frozen);
+}
 
 TEST(RealtimeFaults, DriveTripAndResetKeepTheScanPeriodAndTheBooks) {
   const LineConfig line = load_line_config(kConfigDir / "line.yaml");

@@ -119,6 +119,7 @@ int run_command(const RunArgs& args) {
     options.lock_memory = args.lock_memory;
     options.cpu_dma_latency_us = args.cpu_dma_latency_us;
     options.hmi_config = args.hmi_config;
+    options.fault_switches = inner_plant.get();
     const RealtimeRunResult result = run_realtime(options, line, *plant, progress, ledger);
     kpis = result.kpis;
     runtime_fault = result.fault;

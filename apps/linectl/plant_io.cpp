@@ -32,10 +32,11 @@ void apply_common(std::uint64_t requested, Faults& faults) {
 
 }  // namespace
 
-PlantIo::PlantIo(Plant& plant, std::uint64_t seed) : plant_(plant) {
+PlantIo::PlantIo(Plant& plant, std::uint64_t seed, Plant* switches) : plant_(plant) {
   plant_.reset(seed, plant_input_);
-  if (auto* fast = dynamic_cast<FastPlant*>(&plant)) fast_faults_ = &fast->faults();
-  if (auto* dem = dynamic_cast<DemPlant*>(&plant)) dem_faults_ = &dem->faults();
+  Plant& faulted = switches != nullptr ? *switches : plant;
+  if (auto* fast = dynamic_cast<FastPlant*>(&faulted)) fast_faults_ = &fast->faults();
+  if (auto* dem = dynamic_cast<DemPlant*>(&faulted)) dem_faults_ = &dem->faults();
 }
 
 void PlantIo::set_twin_fault(TwinFault fault, std::size_t target, bool active) {

@@ -30,7 +30,10 @@ enum class TwinFault : std::uint8_t {
 
 class PlantIo final : public ProcessIo {
  public:
-  PlantIo(Plant& plant, std::uint64_t seed);
+  // `switches`: the plant whose fault switches set_twin_fault() drives, when `plant` wraps
+  // it (a CanopenPlant around the fast plant: the fault then reaches the controller through
+  // the bus, as the real one would); null: `plant` itself.
+  PlantIo(Plant& plant, std::uint64_t seed, Plant* switches = nullptr);
 
   void read(std::int64_t now_ns, InputImage& in) override;
   void write(const OutputImage& out) override { output_ = out; }

@@ -84,7 +84,7 @@ RealtimeRunResult run_realtime(const RealtimeRunOptions& options, const LineConf
                                Plant& plant, Progress& progress, LedgerWriter& ledger) {
   LineController controller(line);
   LineControllerLogic logic(controller);
-  PlantIo io(plant, options.seed);
+  PlantIo io(plant, options.seed, options.fault_switches);
   // Before the runtime: the HMI outlives the scans that publish to it.
   const std::unique_ptr<HmiRun> hmi = start_hmi(options.hmi_config, line, logic, io);
   if (!hmi && options.status != nullptr) logic.attach_status(options.status);

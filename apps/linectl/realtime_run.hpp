@@ -49,6 +49,9 @@ struct RealtimeRunOptions {
   // out of deep C-states whose exit would delay the scan's wake-up. -1: leave it alone.
   int cpu_dma_latency_us = -1;
   std::string hmi_config;  // empty: no HMI
+  // The plant whose fault switches the HMI's twin panel drives, when the run's plant wraps
+  // it (--fieldbus canopen); null: the run's plant.
+  Plant* fault_switches = nullptr;
   // Called from the run's own (non-real-time) thread every 50 ms while the loop runs.
   std::function<void(double elapsed_s, const PlantIo& io)> on_tick;
   // Publishes the scan's status snapshots when set and no HMI runs (the HMI owns the one
