@@ -256,13 +256,19 @@ int calibrate_command(const CalibrateArgs& args) {
   std::string sensitivity;
   for (std::size_t p = 0; p < parameters.size(); ++p) {
     const ParameterSensitivity& s = result.sensitivity[p];
-    sensitivity += fmt::format("  {}: at {:.4g} down to {:.4g}: {}, up to {:.4g}: {} -> {}\n",
-                               parameters[p].address, result.best[p], s.value_down,
-                               rms_text(s.rmse_down), s.value_up, rms_text(s.rmse_up),
-                               s.determined ? "determined" : "NOT determined by this dataset");
+    const std::string interval =
+        std::isfinite(s.interval_low) && std::isfinite(s.interval_high)
+            ? fmt::format("95 % interval {:.4g} .. {:.4g}", s.interval_low, s.interval_high)
+            : std::string("no interval: the moves do not bound it");
+    sensitivity += fmt::format(
+        "  {}: at {:.4g} down to {:.4g}: {}, up to {:.4g}: {} -> {}; {}\n", parameters[p].address,
+        result.best[p], s.value_down, rms_text(s.rmse_down), s.value_up, rms_text(s.rmse_up),
+        s.determined ? "determined" : "NOT determined by this dataset", interval);
   }
-  spdlog::info("sensitivity, RMS (SI) with each parameter alone moved a tenth of its box:\n{}",
-               sensitivity);
+  spdlog::info(
+      "sensitivity, RMS (SI) with each parameter alone moved a tenth of its box, and its 95 % "
+      "interval with the others held (conditional):\n{}",
+      sensitivity);
   try {
     for (const fs::path& plot : write_sensitivity_plots(result, out)) {
       spdlog::info("sensitivity plot: {}", plot.string());

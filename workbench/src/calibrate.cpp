@@ -257,6 +257,12 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
       }
     }
     s.determined = moves_made > 0 && significant == moves_made;
+    const auto rss = [&](double rmse) { return n * rmse * rmse; };
+    const auto [low_u, high_u] =
+        detail::quadratic_interval(rss(s.rmse_down), rss(result.rmse), rss(s.rmse_up), best_unit[p],
+                                   kSensitivityStep, threshold);
+    s.interval_low = std::isnan(low_u) ? nan : from_unit(parameters[p], std::max(0.0, low_u));
+    s.interval_high = std::isnan(high_u) ? nan : from_unit(parameters[p], std::min(1.0, high_u));
     std::vector<double> sum(static_cast<std::size_t>(slices), 0.0);
     std::vector<int> count(static_cast<std::size_t>(slices), 0);
     for (std::size_t k = 0; k < unit_points.size(); ++k) {
@@ -279,6 +285,23 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
 }
 
 }  // namespace
+
+std::pair<double, double> detail::quadratic_interval(double rss_down, double rss_best,
+                                                     double rss_up, double u_best, double step,
+                                                     double threshold) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (!std::isfinite(rss_best) || !(step > 0.0) || !(threshold > 0.0)) return {nan, nan};
+  double curvature = 0.0;  // a of rss(u) = rss_best + a (u - u_best)^2
+  if (std::isfinite(rss_down) && std::isfinite(rss_up)) {
+    curvature = (rss_down - 2.0 * rss_best + rss_up) / (2.0 * step * step);
+  } else if (std::isfinite(rss_down) || std::isfinite(rss_up)) {
+    const double rss_side = std::isfinite(rss_down) ? rss_down : rss_up;
+    curvature = (rss_side - rss_best) / (step * step);
+  }
+  if (!(curvature > 0.0)) return {nan, nan};
+  const double half_width = std::sqrt(threshold / curvature);
+  return {u_best - half_width, u_best + half_width};
+}
 
 Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& base,
                       const std::vector<CalibratedParameter>& parameters,
@@ -401,9 +424,13 @@ std::string calibration_json(const Calibration& calibration) {
       nlohmann::json main_effect = nlohmann::json::array();
       for (const double rmse : s.main_effect_rmse) main_effect.push_back(number(rmse));
       out["parameters"].back()["sensitivity"] = {
-          {"value_down", s.value_down}, {"rmse_down_si", number(s.rmse_down)},
-          {"value_up", s.value_up},     {"rmse_up_si", number(s.rmse_up)},
-          {"determined", s.determined}, {"main_effect_rmse_si", main_effect}};
+          {"value_down", s.value_down},
+          {"rmse_down_si", number(s.rmse_down)},
+          {"value_up", s.value_up},
+          {"rmse_up_si", number(s.rmse_up)},
+          {"determined", s.determined},
+          {"main_effect_rmse_si", main_effect},
+          {"interval_95", {number(s.interval_low), number(s.interval_high)}}};
     }
   }
   out["design"] = nlohmann::json::array();
@@ -464,6 +491,11 @@ std::vector<std::filesystem::path> write_sensitivity_plots(const Calibration& ca
     plot.series.push_back(std::move(local));
     plot.references.push_back(
         {.vertical = true, .value = calibration.best[p], .label = "calibrated"});
+    for (const double bound : {s.interval_low, s.interval_high}) {
+      if (std::isfinite(bound)) {
+        plot.references.push_back({.vertical = true, .value = bound, .label = "95 % interval"});
+      }
+    }
     if (calibration.noise_si > 0.0) {
       plot.references.push_back({false, calibration.noise_si, "noise"});
     }

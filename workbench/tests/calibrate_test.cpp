@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <set>
 
@@ -110,6 +111,28 @@ TEST(Calibrate, AddressesSetEveryLawTheyNameAndNothingElse) {
   }
 }
 
+// The interval of an exact parabola about the calibrated point, rss(u) = 100 + 400 (u - 0.5)^2,
+// sampled at 0.4, 0.5 and 0.6: half width sqrt(3.84 / 400) = 0.098, from both moves or one.
+TEST(Calibrate, QuadraticIntervalOfAParabola) {
+  const auto rss = [](double u) { return 100.0 + 400.0 * (u - 0.5) * (u - 0.5); };
+  constexpr double kThreshold = 3.84;
+  const double half_width = std::sqrt(kThreshold / 400.0);
+  const auto [low, high] =
+      detail::quadratic_interval(rss(0.4), rss(0.5), rss(0.6), 0.5, 0.1, kThreshold);
+  EXPECT_NEAR(low, 0.5 - half_width, 1e-12);
+  EXPECT_NEAR(high, 0.5 + half_width, 1e-12);
+  // One move (the other past the box): the curvature from that side alone.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto [low_one, high_one] =
+      detail::quadratic_interval(nan, rss(0.5), rss(0.6), 0.5, 0.1, kThreshold);
+  EXPECT_NEAR(low_one, 0.5 - half_width, 1e-12);
+  EXPECT_NEAR(high_one, 0.5 + half_width, 1e-12);
+  // Flat or bending down: the moves do not bound the parameter.
+  EXPECT_TRUE(std::isnan(detail::quadratic_interval(5.0, 5.0, 5.0, 0.5, 0.1, kThreshold).first));
+  EXPECT_TRUE(std::isnan(detail::quadratic_interval(4.0, 5.0, 4.0, 0.5, 0.1, kThreshold).second));
+  EXPECT_TRUE(std::isnan(detail::quadratic_interval(nan, 5.0, nan, 0.5, 0.1, kThreshold).first));
+}
+
 TEST(Calibrate, RecoversTheBondStiffnessOfACompressionDataset) {
   // Measured on a block whose bonds are 1.8 times appendix B's; the twin starts from appendix
   // B. The plate force is proportional to the normal stiffness, so the fit must find it to the
@@ -168,6 +191,17 @@ TEST(Calibrate, SensitivitySaysWhichParametersTheDataDetermine) {
   EXPECT_GT(stiffness.rmse_down, 2.0 * result.rmse);
   EXPECT_GT(stiffness.rmse_up, 2.0 * result.rmse);
   EXPECT_FALSE(friction.determined);
+  // The stiffness' 95 % interval holds the truth and is narrow: the noise resolves the
+  // stiffness to about 0.3 % here, and 5 % leaves room for the parabola over a 26 % step.
+  EXPECT_LE(stiffness.interval_low, 1.8e6);
+  EXPECT_GE(stiffness.interval_high, 1.8e6);
+  EXPECT_LT(stiffness.interval_high - stiffness.interval_low, 0.05 * 1.8e6);
+  // The friction's is unbounded, or spans most of its box: the data say nothing of it.
+  const bool friction_bounded =
+      std::isfinite(friction.interval_low) && std::isfinite(friction.interval_high);
+  if (friction_bounded) {
+    EXPECT_GT(friction.interval_high - friction.interval_low, 0.5 * 0.9);
+  }
   // The moves are a tenth of the box around the calibrated value, inside the box.
   EXPECT_NEAR(std::log(stiffness.value_up / stiffness.value_down), 0.2 * std::log(1e7 / 3e5), 1e-9);
   EXPECT_LT(friction.value_down, result.best[1]);
@@ -188,6 +222,8 @@ TEST(Calibrate, SensitivitySaysWhichParametersTheDataDetermine) {
   }
   const nlohmann::json json = nlohmann::json::parse(calibration_json(result));
   EXPECT_TRUE(json["parameters"][0]["sensitivity"]["determined"].get<bool>());
+  EXPECT_DOUBLE_EQ(json["parameters"][0]["sensitivity"]["interval_95"][0].get<double>(),
+                   stiffness.interval_low);
   EXPECT_FALSE(json["parameters"][1]["sensitivity"]["determined"].get<bool>());
 }
 

@@ -12,6 +12,7 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "fl/twin/model_tests/fixtures.hpp"
@@ -73,6 +74,13 @@ struct ParameterSensitivity {
   double rmse_up = 0.0;
   // Every move made raises the error beyond the noise: the data determine the parameter here.
   bool determined = false;
+  // A conditional 95 % confidence interval (profile likelihood with the other parameters held
+  // at their calibrated values, so correlated parameters have wider joint intervals): where
+  // the residual sum of squares, a parabola about the calibrated point (the fit's minimum)
+  // with the moves' curvature, rises 3.84 sigma^2; clipped to the box. NaN when the moves do
+  // not bound it (no upward curvature, no finite move).
+  double interval_low = 0.0;
+  double interval_high = 0.0;
   // Design points by slice of the box (factorial: one per level; Hammersley: quarters), the
   // mean RMS of those the twin ran; NaN for a slice without any. The values: each slice's
   // level or middle, in the parameter's unit.
@@ -118,5 +126,18 @@ std::string calibration_json(const Calibration& calibration);
 // files written; throws fl::report::ReportError naming a file that cannot be written.
 std::vector<std::filesystem::path> write_sensitivity_plots(const Calibration& calibration,
                                                            const std::filesystem::path& folder);
+
+namespace detail {
+
+// The interval of ParameterSensitivity in the search coordinate u: rss_at(u) for u0 - step,
+// u0, u0 + step (NaN for a move not made or refused), the likelihood-ratio threshold
+// (3.84 sigma^2). The parabola is centred on u0, the fit's minimum: the moves' second
+// difference gives its curvature (one move: its rise over step^2). A three-point vertex
+// would be pulled off the minimum by the error's asymmetry over a tenth of the box (a
+// stiffness on a log scale). Returns {NaN, NaN} without upward curvature.
+std::pair<double, double> quadratic_interval(double rss_down, double rss_best, double rss_up,
+                                             double u_best, double step, double threshold);
+
+}  // namespace detail
 
 }  // namespace fl::workbench
