@@ -253,6 +253,47 @@ TEST(TwoProcessDds, TwinStopsTheBeltsWhenTheControllerDies) {
   EXPECT_GT(run.twin["truth"]["on_line_at_end"].get<int>(), 0);  // stopped, not emptied
 }
 
+// The service's run (fillet-line-control.service): `control --duration forever` feeds until
+// SIGTERM, then stops the line, waits for it and exits 0 with balanced books; the twin, fed for
+// far longer, sees the line stopped and its belts empty and ends too.
+TEST(TwoProcessDds, ControlRunsForeverUntilSigtermThenStopsTheLineCleanly) {
+  ASSERT_NE(std::getenv("CYCLONEDDS_URI"), nullptr) << "run through ctest";
+  const fs::path dir = fs::path(FL_TEST_WORK_DIR) / "forever";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string domain = "58";
+  write_tolerant_line_config(dir / "line.yaml");
+  const pid_t control = spawn(
+      {FL_LINECTL, "control", "--duration", "forever", "--domain", domain, "--fifo", kControlFifo,
+       "--config", (dir / "line.yaml").string(), "--json", (dir / "control.json").string()},
+      dir / "control.log");
+  const pid_t twin =
+      spawn({FL_LINECTL, "twin", "serve", "--plant", "fast", "--seed", "1", "--duration", "5m",
+             "--domain", domain, "--fifo", kTwinFifo, "--json", (dir / "twin.json").string()},
+            dir / "twin.log");
+  // Discovery and start-up take about a second; by 10 s fillets have reached the outfeed.
+  ::sleep(10);
+  ::kill(control, SIGTERM);
+  const int control_exit = wait_exit(control);
+  const int twin_exit = wait_exit(twin);
+  const std::string logs =
+      "control:\n" + text(dir / "control.log") + "\ntwin:\n" + text(dir / "twin.log");
+  ASSERT_EQ(control_exit, 0) << logs;
+  ASSERT_EQ(twin_exit, 0) << logs;
+  const nlohmann::json control_kpis = load(dir / "control.json");
+  const nlohmann::json twin_kpis = load(dir / "twin.json");
+  // Fed until the signal: about 10 s (start-up inside it), nowhere near the twin's 5 minutes.
+  const double fed_s = control_kpis["fed_duration_s"].get<double>();
+  EXPECT_GT(fed_s, 5.0);
+  EXPECT_LT(fed_s, 20.0);
+  EXPECT_TRUE(control_kpis["ledger"]["balanced"].get<bool>());
+  EXPECT_EQ(control_kpis["ledger"]["records_dropped"].get<int>(), 0);
+  EXPECT_GT(control_kpis["ledger"]["items_closed"].get<int>(), 0);
+  EXPECT_FALSE(control_kpis["runtime"]["line_faulted"].get<bool>());
+  EXPECT_TRUE(twin_kpis["truth"]["balanced"].get<bool>());
+  EXPECT_EQ(twin_kpis["truth"]["on_line_at_end"].get<int>(), 0);
+}
+
 // The two-process mode on a secured domain (DDS Security: authentication, access control,
 // encryption; docs/dds.md): the controller and the twin each with its own identity run and
 // balance their books, and the camera identity, allowed to publish estimates only, cannot

@@ -45,8 +45,10 @@ if [[ -f $root/etc/fillet-line/hmi.yaml ]]; then
 fi
 in_root dpkg-query --control-show fillet-line conffiles | grep -q '^/etc/fillet-line/line.yaml' ||
   fail "/etc/fillet-line/line.yaml is not a conffile"
-in_root systemd-analyze verify /usr/lib/systemd/system/fillet-line.service ||
-  fail "systemd-analyze verify on the installed unit"
+for unit in fillet-line.service fillet-line-control.service; do
+  in_root systemd-analyze verify /usr/lib/systemd/system/$unit ||
+    fail "systemd-analyze verify on the installed $unit"
+done
 
 as_service_user() {
   in_root setpriv --reuid=fillet-line --regid=fillet-line --init-groups \
@@ -55,6 +57,8 @@ as_service_user() {
 
 say "linectl config check on the installed configuration"
 as_service_user linectl config check --plant fast || fail "config check of /etc/fillet-line"
+# fillet-line-control.service's ExecStartPre: the installed can.yaml
+as_service_user linectl config check --can || fail "config check --can of /etc/fillet-line"
 
 say "a broken line.yaml is refused, naming file and line"
 broken_line=$(grep -n -m1 'max_speed_mps:' "$root/etc/fillet-line/line.yaml" | cut -d: -f1)

@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <ctime>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <thread>
@@ -47,15 +48,17 @@ std::filesystem::path config_or_default(const std::string& given, const char* de
 }
 
 std::optional<RunTimes> parse_run_times(const std::string& duration, const std::string& wait,
-                                        const std::string& drain) {
-  const auto duration_s = parse_duration_s(duration);
+                                        const std::string& drain, bool allow_forever) {
+  const auto duration_s = allow_forever && duration == "forever"
+                              ? std::optional<double>(std::numeric_limits<double>::infinity())
+                              : parse_duration_s(duration);
   const auto wait_s = parse_duration_s(wait);
   const auto drain_s = parse_duration_s(drain);
   if (!duration_s || !wait_s || !drain_s) {
     spdlog::error(
         "--duration {}, --wait {}, --drain {}: each must be a positive duration "
-        "(examples: 90s, 10m)",
-        duration, wait, drain);
+        "(examples: 90s, 10m{})",
+        duration, wait, drain, allow_forever ? "; --duration also forever" : "");
     return std::nullopt;
   }
   return RunTimes{*duration_s, *wait_s, *drain_s};

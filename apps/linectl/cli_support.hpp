@@ -43,8 +43,10 @@ struct RunTimes {
 };
 
 // Logs which options must be positive durations and returns nullopt when one is not.
+// With allow_forever, --duration forever gives an infinite feeding time (a service that runs
+// until it is stopped).
 std::optional<RunTimes> parse_run_times(const std::string& duration, const std::string& wait,
-                                        const std::string& drain);
+                                        const std::string& drain, bool allow_forever = false);
 
 // "fast" or "dem"; an empty plant_config takes the plant's default file. Throws
 // std::runtime_error for an unknown name and ConfigError for a bad file.

@@ -2,8 +2,10 @@
 // docs/dds.md "Two-process mode").
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -132,7 +134,8 @@ CLI::App* add_control_subcommand(CLI::App& app, ControlArgs& args) {
                                          "run the line controller on DDS (estimates, sensors in; "
                                          "commands, status out) on the 10 ms real-time schedule");
   control->add_option("--duration", args.duration,
-                      "feeding time: the line is stopped after it, e.g. 60s, 10m");
+                      "feeding time: the line is stopped after it, e.g. 60s, 10m; forever: "
+                      "until SIGTERM or SIGINT (the service)");
   control->add_option("--config", args.config, "line configuration (YAML)");
   control->add_option("--json", args.json_path, "write the ledger summary and timing as JSON");
   control->add_option("--ledger", args.ledger_path, "write every ledger record as CSV");
@@ -192,11 +195,16 @@ int run_control(ControlParts& parts, Io& io, const ModeHooks& hooks) {
   const RealtimeSetup setup = runtime.start();
   if (!setup.error.empty()) spdlog::warn("real-time setup: {}", setup.error);
   if (!setup.started) throw std::runtime_error("the scan runtime did not start: " + setup.error);
-  spdlog::info("control: scanning; {} s of feeding, then a controlled stop", times.duration_s);
+  if (std::isfinite(times.duration_s)) {
+    spdlog::info("control: scanning; {} s of feeding, then a controlled stop", times.duration_s);
+  } else {
+    spdlog::info("control: scanning until a stop signal, then a controlled stop");
+  }
 
   bool stop_sent = false;
   bool line_faulted = false;
   double elapsed_s = 0.0;
+  double fed_s = times.duration_s;  // until the stop request (forever: a stop signal)
   while (runtime.running()) {
     std::this_thread::sleep_for(kDrainPeriod);
     drain();
@@ -205,6 +213,7 @@ int run_control(ControlParts& parts, Io& io, const ModeHooks& hooks) {
     if (!stop_sent && (elapsed_s >= times.duration_s || g_control_interrupts.load() > 0)) {
       parts.logic.request_stop();
       stop_sent = true;
+      fed_s = std::min(times.duration_s, elapsed_s);
     }
     const LineState state = io.state();
     // A fault stops the line; the run ends there with whatever the ledger then holds.
@@ -227,7 +236,8 @@ int run_control(ControlParts& parts, Io& io, const ModeHooks& hooks) {
 
   Kpis kpis;
   kpis.plant = args.can_interface.empty() ? "dds" : "canopen+dds";
-  collector.finish(parts.controller, 0, 0, times.duration_s, elapsed_s, elapsed_s, kpis);
+  if (!stop_sent) fed_s = std::min(times.duration_s, elapsed_s);  // ended by a fault
+  collector.finish(parts.controller, 0, 0, fed_s, elapsed_s, elapsed_s, kpis);
   const CycleStatsSummary stats = runtime.stats().summary();
   kpis.compute = stats.compute;
   const dds::LineOutputCounters out = parts.output.counters();
@@ -260,7 +270,7 @@ int run_control(ControlParts& parts, Io& io, const ModeHooks& hooks) {
   std::printf(
       "control, %.1f s fed, %.1f s wall, %llu scans, %llu overruns, wake-up latency "
       "p99.9 %.1f us max %.1f us\n",
-      times.duration_s, elapsed_s, static_cast<unsigned long long>(stats.scans),
+      fed_s, elapsed_s, static_cast<unsigned long long>(stats.scans),
       static_cast<unsigned long long>(stats.overruns),
       static_cast<double>(stats.wakeup_latency.p999_ns) / 1e3,
       static_cast<double>(stats.wakeup_latency.max_ns) / 1e3);
@@ -424,7 +434,8 @@ int control_over_can(ControlParts& parts) {
 }  // namespace
 
 int control_command(const ControlArgs& args) {
-  const std::optional<RunTimes> times = parse_run_times(args.duration, args.wait, args.drain);
+  const std::optional<RunTimes> times =
+      parse_run_times(args.duration, args.wait, args.drain, /*allow_forever=*/true);
   if (!times) return 2;
   const LineConfig line = load_line_config(config_or_default(args.config, "line.yaml"));
   LedgerWriter ledger(args.ledger_path);

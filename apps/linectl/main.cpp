@@ -4,7 +4,7 @@
 //   linectl run --realtime --duration forever   as the service runs: until SIGTERM or SIGINT
 //   linectl vision eval REC...      the estimator's accuracy against the twin's ground truth
 //   linectl soak [--duration 1h]    a long real-time run judged by memory, deadlines, losses
-//   linectl config check [FILE]     validate a line configuration (and --plant's)
+//   linectl config check [FILE]     validate a line configuration (and --plant's, --can's)
 //   linectl record / replay         camera recordings and their regression replay
 //   (record_replay.hpp)
 //   linectl twin serve / control    the twin and the controller as two processes over DDS
@@ -231,6 +231,12 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"fast", "dem"}));
   check->add_option("--plant-config", check_plant_config_path,
                     "the plant's configuration (default: its file from the search path)");
+  bool check_can = false;
+  std::string check_can_config;
+  check->add_flag("--can", check_can,
+                  "also validate the CANopen bus configuration (can.yaml from the search path)");
+  check->add_option("--can-config", check_can_config,
+                    "also validate this CANopen bus configuration (implies --can)");
   config->require_subcommand(1);
 
   RecordArgs record_args;
@@ -288,6 +294,11 @@ int main(int argc, char** argv) {
       if (!check_plant.empty()) {
         check_plant_config(check_plant, check_plant_config_path);
         spdlog::info("{} plant configuration: valid", check_plant);
+      }
+      if (check_can || !check_can_config.empty()) {
+        const std::filesystem::path can_file = config_or_default(check_can_config, "can.yaml");
+        fl::drivers::load_can_config(can_file, fl::load_line_config(line_file));
+        spdlog::info("{}: valid", can_file.string());
       }
       return 0;
     }
