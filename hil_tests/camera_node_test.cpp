@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -191,33 +192,48 @@ TEST_F(CameraNode, PublishesWhatTheInProcessEstimatorMeasures) {
   EXPECT_EQ(stats["frames_unreadable"].get<int>(), 0);
 }
 
-// The recording's last `count` frames with a fillet in view, in recording order.
-std::vector<cv::Mat> last_frames_with_fillets(const rec::RecordedCamera& camera,
-                                              vision::FilletEstimator& estimator,
-                                              std::size_t count) {
-  std::vector<cv::Mat> frames;
-  for (auto it = camera.frames.rbegin(); it != camera.frames.rend() && frames.size() < count;
-       ++it) {
-    const cv::Mat bgr = rec::decode_frame(it->second);
-    if (measure_in_process(estimator, bgr, it->first).count > 0) frames.insert(frames.begin(), bgr);
+// An image folder to serve, from the checked-in recording's orientation camera: its
+// calibration saved in `dir`, an estimator on it, and its last `count` frames with a fillet
+// in view (in recording order) for the test to write as files.
+struct ImageSource {
+  fs::path images;
+  fs::path calibration;
+  std::unique_ptr<vision::FilletEstimator> estimator;
+  std::vector<cv::Mat> frames_with_fillets;
+};
+
+ImageSource prepare_image_source(const fs::path& dir, std::size_t count) {
+  ImageSource source;
+  source.images = dir / "images";
+  source.calibration = dir / "camera.yaml";
+  fs::create_directories(source.images);
+  const rec::Recording recording = rec::load_recording(recording_path());
+  const rec::RecordedCamera& camera =
+      recording.cameras[static_cast<std::size_t>(CameraId::kOrientation)];
+  if (!camera.calibration) {
+    ADD_FAILURE() << recording_path() << " has no orientation calibration";
+    return source;
   }
-  return frames;
+  vision::save_calibration(source.calibration, *camera.calibration);
+  source.estimator = std::make_unique<vision::FilletEstimator>(*camera.calibration);
+  for (auto it = camera.frames.rbegin();
+       it != camera.frames.rend() && source.frames_with_fillets.size() < count; ++it) {
+    const cv::Mat bgr = rec::decode_frame(it->second);
+    if (measure_in_process(*source.estimator, bgr, it->first).count > 0) {
+      source.frames_with_fillets.insert(source.frames_with_fillets.begin(), bgr);
+    }
+  }
+  return source;
 }
 
 TEST_F(CameraNode, ServesPastAnUnreadableImageAndWithholdsAWrongSizeFrame) {
   const fs::path dir = fresh_dir("images");
-  const fs::path images = dir / "images";
-  fs::create_directories(images);
-  const rec::Recording recording = rec::load_recording(recording_path());
-  const rec::RecordedCamera& camera =
-      recording.cameras[static_cast<std::size_t>(CameraId::kOrientation)];
-  ASSERT_TRUE(camera.calibration.has_value());
-  vision::save_calibration(dir / "camera.yaml", *camera.calibration);
-  vision::FilletEstimator estimator(*camera.calibration);
-
   // Eight files: the recording's last six frames with a fillet in view, and in their midst
   // (files 2 and 5) a file that is not an image and a frame of half the calibrated size.
-  const std::vector<cv::Mat> frames_with_fillets = last_frames_with_fillets(camera, estimator, 6);
+  ImageSource source = prepare_image_source(dir, 6);
+  const fs::path& images = source.images;
+  vision::FilletEstimator& estimator = *source.estimator;
+  const std::vector<cv::Mat>& frames_with_fillets = source.frames_with_fillets;
   ASSERT_EQ(frames_with_fillets.size(), 6U);
   std::map<std::uint32_t, CameraFrame> expected;  // by the sequence the node gives the file
   std::size_t next_good = 0;
@@ -242,11 +258,11 @@ TEST_F(CameraNode, ServesPastAnUnreadableImageAndWithholdsAWrongSizeFrame) {
   dds::Participant controller(kDomainImages);
   dds::DdsCameraInput input(controller);
   // 25 Hz: the line cameras' rate (config/line.yaml).
-  const pid_t node = spawn(
-      {FL_LINECTL, "camera", "serve", "--images", images.string(), "--calibration",
-       (dir / "camera.yaml").string(), "--fps", "25", "--domain", std::to_string(kDomainImages),
-       "--wait", "20s", "--json", (dir / "node.json").string()},
-      dir / "node.log");
+  const pid_t node =
+      spawn({FL_LINECTL, "camera", "serve", "--images", images.string(), "--calibration",
+             source.calibration.string(), "--fps", "25", "--domain", std::to_string(kDomainImages),
+             "--wait", "20s", "--json", (dir / "node.json").string()},
+            dir / "node.log");
   ASSERT_GT(node, 0);
   const Received received = receive_while_running(input, node);
   const std::string log = text(dir / "node.log");
@@ -280,15 +296,9 @@ TEST_F(CameraNode, ServesPastAnUnreadableImageAndWithholdsAWrongSizeFrame) {
 // which is the controller's camera-silent fault, naming the camera.
 TEST_F(CameraNode, CoveredLensFallsSilentRatherThanReportingAnEmptyBelt) {
   const fs::path dir = fresh_dir("covered");
-  const fs::path images = dir / "images";
-  fs::create_directories(images);
-  const rec::Recording recording = rec::load_recording(recording_path());
-  const rec::RecordedCamera& camera =
-      recording.cameras[static_cast<std::size_t>(CameraId::kOrientation)];
-  ASSERT_TRUE(camera.calibration.has_value());
-  vision::save_calibration(dir / "camera.yaml", *camera.calibration);
-  vision::FilletEstimator estimator(*camera.calibration);
-  const std::vector<cv::Mat> belt = last_frames_with_fillets(camera, estimator, 4);
+  const ImageSource source = prepare_image_source(dir, 4);
+  const fs::path& images = source.images;
+  const std::vector<cv::Mat>& belt = source.frames_with_fillets;
   ASSERT_EQ(belt.size(), 4U);
   // 8 frames at 25 Hz: 320 ms without a published frame, well past the 120 ms deadline.
   constexpr std::uint32_t kCovered = 8;
@@ -301,11 +311,11 @@ TEST_F(CameraNode, CoveredLensFallsSilentRatherThanReportingAnEmptyBelt) {
   }
   dds::Participant controller(kDomainCovered);
   dds::DdsCameraInput input(controller);
-  const pid_t node = spawn(
-      {FL_LINECTL, "camera", "serve", "--images", images.string(), "--calibration",
-       (dir / "camera.yaml").string(), "--fps", "25", "--domain", std::to_string(kDomainCovered),
-       "--wait", "20s", "--json", (dir / "node.json").string()},
-      dir / "node.log");
+  const pid_t node =
+      spawn({FL_LINECTL, "camera", "serve", "--images", images.string(), "--calibration",
+             source.calibration.string(), "--fps", "25", "--domain", std::to_string(kDomainCovered),
+             "--wait", "20s", "--json", (dir / "node.json").string()},
+            dir / "node.log");
   ASSERT_GT(node, 0);
   const Received received = receive_while_running(input, node);
   const std::string log = text(dir / "node.log");

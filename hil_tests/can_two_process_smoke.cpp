@@ -98,6 +98,35 @@ void wait_for_scanning(const fs::path& control_log) {
   std::this_thread::sleep_for(std::chrono::seconds(8));
 }
 
+// Both processes for 60 s of feeding (never reached), each writing its JSON into `dir`,
+// returned once the controller's scan has run 8 s: for the tests that kill one of them.
+struct RunningPair {
+  pid_t twin = -1;
+  pid_t control = -1;
+};
+
+RunningPair start_pair(const fs::path& dir, const std::vector<std::string>& environment) {
+  fs::create_directories(dir);
+  const std::string self = fs::read_symlink("/proc/self/exe").string();
+  RunningPair run;
+  run.twin = spawn({self, "twin", "serve", "--plant", "fast", "--seed", "1", "--can", kInterface,
+                    "--duration", "60s", "--wait", "60s", "--json", (dir / "twin.json").string()},
+                   dir / "twin.log", environment);
+  run.control = spawn({self, "control", "--can", kInterface, "--duration", "60s", "--wait", "60s",
+                       "--json", (dir / "control.json").string()},
+                      dir / "control.log", environment);
+  wait_for_scanning(dir / "control.log");
+  return run;
+}
+
+// Kills `victim` with SIGKILL (checking that it died of it) and returns the survivor's exit
+// code, or -1 when it ran past kRunLimit.
+int kill_and_wait(pid_t victim, pid_t survivor) {
+  kill(victim, SIGKILL);
+  EXPECT_EQ(wait_exit_within(victim, kRunLimit), 128 + SIGKILL);
+  return wait_exit_within(survivor, kRunLimit);
+}
+
 class CanTwoProcess : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -187,17 +216,8 @@ TEST_F(CanTwoProcess, ControlAndTwinRunTheLineOverVcan) {
 // closes what was on the belts as lost, nothing dropped (exit 4: the peer was lost).
 TEST_F(CanTwoProcess, ControllerFaultsWhenTheDevicesFallSilent) {
   const fs::path dir = kWorkDir / "devices_lost";
-  fs::create_directories(dir);
-  const pid_t twin = spawn({self(), "twin", "serve", "--plant", "fast", "--seed", "1", "--can",
-                            kInterface, "--duration", "60s", "--wait", "60s"},
-                           dir / "twin.log", environment());
-  const pid_t control = spawn({self(), "control", "--can", kInterface, "--duration", "60s",
-                               "--wait", "60s", "--json", (dir / "control.json").string()},
-                              dir / "control.log", environment());
-  wait_for_scanning(dir / "control.log");
-  kill(twin, SIGKILL);
-  EXPECT_EQ(wait_exit_within(twin, kRunLimit), 128 + SIGKILL);
-  const int control_exit = wait_exit_within(control, kRunLimit);
+  const RunningPair run = start_pair(dir, environment());
+  const int control_exit = kill_and_wait(run.twin, run.control);
   const std::string logs = "--- control\n" + text(dir / "control.log");
   std::printf("%s", logs.c_str());
   ASSERT_EQ(control_exit, 4) << logs;
@@ -215,18 +235,8 @@ TEST_F(CanTwoProcess, ControllerFaultsWhenTheDevicesFallSilent) {
 // controller lost (exit 4) with every fillet it fed accounted for.
 TEST_F(CanTwoProcess, TwinStopsTheBeltsWhenTheMasterFallsSilent) {
   const fs::path dir = kWorkDir / "master_lost";
-  fs::create_directories(dir);
-  const pid_t twin =
-      spawn({self(), "twin", "serve", "--plant", "fast", "--seed", "1", "--can", kInterface,
-             "--duration", "60s", "--wait", "60s", "--json", (dir / "twin.json").string()},
-            dir / "twin.log", environment());
-  const pid_t control =
-      spawn({self(), "control", "--can", kInterface, "--duration", "60s", "--wait", "60s"},
-            dir / "control.log", environment());
-  wait_for_scanning(dir / "control.log");
-  kill(control, SIGKILL);
-  EXPECT_EQ(wait_exit_within(control, kRunLimit), 128 + SIGKILL);
-  const int twin_exit = wait_exit_within(twin, kRunLimit);
+  const RunningPair run = start_pair(dir, environment());
+  const int twin_exit = kill_and_wait(run.control, run.twin);
   const std::string logs = "--- twin\n" + text(dir / "twin.log");
   std::printf("%s", logs.c_str());
   ASSERT_EQ(twin_exit, 4) << logs;
