@@ -112,6 +112,10 @@ struct Simulation::Impl {
   std::vector<std::uint32_t> bond_begin;
   std::vector<std::vector<Vec3>> force_buffers;  // threads 1.. (thread 0 writes the state)
   std::vector<std::vector<Vec3>> torque_buffers;
+  // per thread (all of them), per wall: reactions summed in thread order after the step, so a
+  // run stays bit-identical for a fixed thread count
+  std::vector<std::vector<Vec3>> wall_force_buffers;
+  std::vector<std::vector<Vec3>> wall_torque_buffers;
   std::vector<ThreadTally> tallies;
 
   // scratch for re-ordering
@@ -149,6 +153,8 @@ Simulation::Simulation(std::shared_ptr<const Model> model)
   }
   const std::size_t wall_count = spec.planes.size() + spec.meshes.size();
   state_.walls.resize(wall_count);
+  state_.wall_force_n.assign(wall_count, Vec3::Zero());
+  state_.wall_torque_nm.assign(wall_count, Vec3::Zero());
   m.plane_point_m.resize(spec.planes.size());
   m.plane_normal.resize(spec.planes.size());
   m.plane_states.resize(spec.planes.size());
@@ -171,6 +177,10 @@ Simulation::Simulation(std::shared_ptr<const Model> model)
   m.tallies.resize(static_cast<std::size_t>(m.threads));
   m.force_buffers.resize(static_cast<std::size_t>(m.threads));
   m.torque_buffers.resize(static_cast<std::size_t>(m.threads));
+  m.wall_force_buffers.assign(static_cast<std::size_t>(m.threads),
+                              std::vector<Vec3>(wall_count, Vec3::Zero()));
+  m.wall_torque_buffers.assign(static_cast<std::size_t>(m.threads),
+                               std::vector<Vec3>(wall_count, Vec3::Zero()));
 }
 
 Simulation::~Simulation() = default;
@@ -267,16 +277,18 @@ std::uint32_t Simulation::add_body(std::span<const Vec3> positions_m,
   return body;
 }
 
-WallState& Simulation::wall(std::string_view name) {
+std::size_t Simulation::wall_index(std::string_view name) const {
   const ModelSpec& spec = model_->spec();
   for (std::size_t w = 0; w < spec.planes.size(); ++w) {
-    if (spec.planes[w].name == name) return state_.walls[w];
+    if (spec.planes[w].name == name) return w;
   }
   for (std::size_t w = 0; w < spec.meshes.size(); ++w) {
-    if (spec.meshes[w].name == name) return state_.walls[spec.planes.size() + w];
+    if (spec.meshes[w].name == name) return spec.planes.size() + w;
   }
   throw std::invalid_argument("dem: no wall named '" + std::string(name) + "'");
 }
+
+WallState& Simulation::wall(std::string_view name) { return state_.walls[wall_index(name)]; }
 
 // ------------------------------------------------------------------------------------ setup
 
@@ -745,6 +757,10 @@ void Simulation::compute_forces() {
     Vec3* torque = t == 0 ? s.torque_nm.data() : m.torque_buffers[t].data();
     std::fill(force, force + n, Vec3::Zero());
     std::fill(torque, torque + n, Vec3::Zero());
+    Vec3* wall_force = m.wall_force_buffers[t].data();
+    Vec3* wall_torque = m.wall_torque_buffers[t].data();
+    std::fill(wall_force, wall_force + wall_count, Vec3::Zero());
+    std::fill(wall_torque, wall_torque + wall_count, Vec3::Zero());
     ThreadTally tally;
     const Vec3* x = s.position_m.data();
     const Vec3* v = s.velocity_m_per_s.data();
@@ -861,8 +877,14 @@ void Simulation::compute_forces() {
           m.wall_interactions[wall_row + wall]->contact_chain->compute(g, pair_state, acc);
           if (!acc.touching) return;
           const Vec3 tangential = acc.tangential_elastic_force_n + acc.tangential_damping_force_n;
-          force[i] += (acc.normal_force_n + acc.normal_damping_force_n) * normal + tangential;
+          const Vec3 on_particle =
+              (acc.normal_force_n + acc.normal_damping_force_n) * normal + tangential;
+          force[i] += on_particle;
           torque[i] += ri * tangential.cross(normal) + acc.torque_on_i_nm;
+          // The reaction, applied at the contact point; a law's pure moment (rolling
+          // resistance) acts back on the wall as well.
+          wall_force[wall] -= on_particle;
+          wall_torque[wall] -= (point - moved_pivot).cross(on_particle) + acc.torque_on_i_nm;
           tally.contact_energy_j += acc.elastic_energy_j;
         };
         std::uint64_t history = m.wall_history[i];
@@ -963,6 +985,17 @@ void Simulation::compute_forces() {
         }
       }
     }
+  }
+
+  for (std::size_t wall = 0; wall < wall_count; ++wall) {
+    Vec3 wall_force = Vec3::Zero();
+    Vec3 wall_torque = Vec3::Zero();
+    for (std::size_t t = 0; t < static_cast<std::size_t>(m.active_threads); ++t) {
+      wall_force += m.wall_force_buffers[t][wall];
+      wall_torque += m.wall_torque_buffers[t][wall];
+    }
+    s.wall_force_n[wall] = wall_force;
+    s.wall_torque_nm[wall] = wall_torque;
   }
 
   double contact_energy = 0.0;

@@ -1,8 +1,10 @@
 // Contact laws against analytic answers: Hertz impact, restitution, JKR pull-off, Coulomb.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 #include "dem_test_support.hpp"
 #include "fl/twin/dem/config.hpp"
@@ -145,6 +147,42 @@ TEST(DemWalls, BeltDragsSphereAlong) {
   // contact line is conserved (zero): m v r + I w = 0 with I = 2/5 m r^2; rolling without slip
   // on the belt (v - w r = v_belt) then gives v = 2/7 v_belt.
   EXPECT_NEAR(sim.state().velocity_m_per_s[0].x(), 0.3 * 2.0 / 7.0, 0.01 * 0.3 * 2.0 / 7.0);
+}
+
+// The reaction on a wall (EDEM's geometry force): three spheres of mass m at rest on the floor
+// press it with their weight, 3 m g downwards, and its torque about the floor's pivot (the
+// origin) is the sum of (x, y, 0) x (0, 0, -m g) = (-y m g, x m g, 0) over the contact points.
+TEST(DemWalls, FloorCarriesTheRestingSpheresWeightAndItsMoment) {
+  const double g = 9.81;
+  ModelSpec spec =
+      test::ball_model({test::hertz(0.3), test::coulomb(0.5)}, 2e-5, Vec3(0, 0, -g), true);
+  Simulation sim(std::make_shared<Model>(spec));
+  const std::array<Vec3, 3> spots{Vec3(0.05, 0.02, 0), Vec3(-0.03, 0.04, 0), Vec3(0.0, -0.06, 0)};
+  for (const Vec3& spot : spots) sim.add_sphere({spot + Vec3(0, 0, kRadius), kRadius, 0});
+  sim.step(25000);  // 0.5 s: the bounce of e = 0.3 has long died out
+  const std::size_t floor = sim.wall_index("floor");
+  const double weight = test::sphere_mass() * g;
+  const Vec3& force = sim.state().wall_force_n[floor];
+  EXPECT_NEAR(force.z(), -3.0 * weight, 1e-4 * weight);
+  EXPECT_NEAR(force.x(), 0.0, 1e-6 * weight);
+  EXPECT_NEAR(force.y(), 0.0, 1e-6 * weight);
+  Vec3 moment = Vec3::Zero();
+  for (const Vec3& spot : spots) moment += Vec3(-spot.y() * weight, spot.x() * weight, 0.0);
+  const Vec3& torque = sim.state().wall_torque_nm[floor];
+  for (int axis = 0; axis < 3; ++axis) {
+    EXPECT_NEAR(torque[axis], moment[axis], 1e-4 * weight * 0.06) << "axis " << axis;
+  }
+  EXPECT_THROW((void)sim.wall_index("no_such_wall"), std::invalid_argument);
+
+  // On two threads (one sphere or two each) the per-thread reactions add up to the same.
+  spec.thread_count = 2;
+  spec.min_particles_per_thread = 1;
+  Simulation threaded(std::make_shared<Model>(spec));
+  for (const Vec3& spot : spots) threaded.add_sphere({spot + Vec3(0, 0, kRadius), kRadius, 0});
+  threaded.step(25000);
+  EXPECT_EQ(threaded.active_thread_count(), 2);
+  EXPECT_NEAR(threaded.state().wall_force_n[floor].z(), force.z(), 1e-9 * weight);
+  EXPECT_NEAR(threaded.state().wall_torque_nm[floor].x(), torque.x(), 1e-9 * weight * 0.06);
 }
 
 }  // namespace

@@ -115,6 +115,9 @@ class Simulation {
   // positions, radii or the particle count requires prepare() (called by step() on add_*).
   [[nodiscard]] State& mutable_state() { return state_; }
   [[nodiscard]] WallState& wall(std::string_view name);
+  // The wall's index in State::walls, wall_force_n and wall_torque_nm (planes first, then
+  // meshes). Throws std::invalid_argument for an unknown name.
+  [[nodiscard]] std::size_t wall_index(std::string_view name) const;
 
   // Energy of the current state (recomputes the elastic parts without changing history).
   [[nodiscard]] EnergyReport energy() const;

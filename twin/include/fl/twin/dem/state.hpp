@@ -56,6 +56,10 @@ struct State {
 
   // walls: planes first, then meshes (ModelSpec order)
   std::vector<WallState> walls;
+  // per wall, of the last force evaluation: the particles' total force on the wall, and its
+  // torque about the wall's moved pivot (pivot_m + translation_m), as EDEM's geometry forces
+  std::vector<Vec3> wall_force_n;
+  std::vector<Vec3> wall_torque_nm;
 
   double time_s = 0.0;
   std::uint64_t step = 0;
