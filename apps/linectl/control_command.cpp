@@ -62,49 +62,6 @@ void log_control_event(const Event& event) {
   }
 }
 
-// The controller's process image on the line's buses: drives and I/O through the CANopen
-// master, the cameras' estimates from DDS. The commands and status also go out on DDS, after
-// the scan's CAN frames, for the HMI and the plant's systems; the estimate-to-command latency
-// is measured to that DDS command, so it bounds the latency to the frames on the bus.
-class FieldbusProcessIo final : public ProcessIo {
- public:
-  FieldbusProcessIo(drivers::CanopenIo& master, dds::DdsCameraInput& cameras,
-                    dds::DdsLineOutput& output)
-      : master_(master), cameras_(cameras), output_(output) {}
-
-  void read(std::int64_t now_ns, InputImage& in) override {
-    scan_ns_ = now_ns;
-    master_.read(now_ns, in);
-    cameras_.read(in, stamps_);
-    last_scan_ns_.store(now_ns, std::memory_order_relaxed);
-  }
-  void write(const OutputImage& out) override {
-    master_.write(out);  // RPDOs, then SYNC
-    output_.write(scan_ns_, out, stamps_);
-    stamps_.fresh_mask = 0;  // a frame's reaction is the first command after it, only
-    faults_.store(out.active_faults, std::memory_order_relaxed);
-    state_.store(out.state, std::memory_order_release);
-  }
-
-  [[nodiscard]] LineState state() const noexcept { return state_.load(std::memory_order_acquire); }
-  [[nodiscard]] std::uint32_t active_faults() const noexcept {
-    return faults_.load(std::memory_order_relaxed);
-  }
-  [[nodiscard]] std::int64_t last_scan_time_ns() const noexcept {
-    return last_scan_ns_.load(std::memory_order_relaxed);
-  }
-
- private:
-  drivers::CanopenIo& master_;
-  dds::DdsCameraInput& cameras_;
-  dds::DdsLineOutput& output_;
-  dds::FrameStamps stamps_{};  // scan thread's own
-  std::int64_t scan_ns_ = 0;   // scan thread's own
-  std::atomic<LineState> state_{LineState::kStopped};
-  std::atomic<std::uint32_t> faults_{0};
-  std::atomic<std::int64_t> last_scan_ns_{0};
-};
-
 // What both modes share, set up by control_command().
 struct ControlParts {
   const ControlArgs& args;
@@ -158,10 +115,8 @@ CLI::App* add_control_subcommand(CLI::App& app, ControlArgs& args) {
 namespace {
 
 // The scan on the real-time runtime until the controlled stop (or a fault) ends the run; the
-// ledger summary, the timing and the mode's counters as the report. Io is DdsProcessIo or
-// FieldbusProcessIo.
-template <typename Io>
-int run_control(ControlParts& parts, Io& io, const ModeHooks& hooks) {
+// ledger summary, the timing and the mode's counters as the report.
+int run_control(ControlParts& parts, dds::DdsProcessIo& io, const ModeHooks& hooks) {
   const ControlArgs& args = parts.args;
   const RunTimes& times = parts.times;
   RuntimeOptions options;
@@ -357,23 +312,12 @@ int control_over_can(ControlParts& parts) {
   std::unique_ptr<drivers::SocketCanBus> bus;
   try {
     bus = std::make_unique<drivers::SocketCanBus>(
-        drivers::SocketCanOptions{parts.args.can_interface, {}, true, false, 0});
+        drivers::SocketCanOptions{config.interface_name, {}, true, false, 0});
   } catch (const drivers::SocketCanError& error) {
-    spdlog::error("control: --can {}: {}", parts.args.can_interface, error.what());
+    spdlog::error("control: --can {}: {}", config.interface_name, error.what());
     return 2;
   }
   drivers::CanopenIo master(*bus, config);
-  std::uint64_t nodes_lost = 0;
-  const auto drain_events = [&] {
-    drivers::CanopenEvent event;
-    while (master.pop_event(event)) {
-      if (event.kind == drivers::CanopenEventKind::kHeartbeatLost) ++nodes_lost;
-      const bool bad = event.kind == drivers::CanopenEventKind::kHeartbeatLost ||
-                       event.kind == drivers::CanopenEventKind::kEmergency;
-      spdlog::log(bad ? spdlog::level::warn : spdlog::level::debug, "canopen: {}",
-                  drivers::describe(event));
-    }
-  };
 
   // Start-up (NMT reset, SDO configuration, NMT start, drives enabled) until every node
   // answers: on power-up the drives may still be booting, and a twin may start later.
@@ -383,7 +327,7 @@ int control_over_can(ControlParts& parts) {
   const bool up = wait_until(
       [&] {
         startup = master.start_up(drivers::monotonic_bus_clock(), true);
-        drain_events();
+        master.log_events();
         return startup.ok;
       },
       parts.times.wait_s, [] { return g_control_interrupts.load() > 0; },
@@ -397,9 +341,9 @@ int control_over_can(ControlParts& parts) {
   spdlog::info("control: CANopen start-up in {:.0f} ms",
                static_cast<double>(startup.duration_ns) / 1e6);
 
-  FieldbusProcessIo io(master, parts.cameras, parts.output);
+  dds::DdsProcessIo io(parts.cameras, master, parts.output);
   ModeHooks hooks;
-  hooks.drain = drain_events;
+  hooks.drain = [&] { master.log_events(); };
   hooks.report = [&](nlohmann::json& json) {
     const drivers::CanopenCounters& counts = master.counters();
     const drivers::CanBusCounters& frames = bus->counters();
@@ -413,7 +357,7 @@ int control_over_can(ControlParts& parts) {
                    {"unknown_cob_id", counts.unknown_cob_id},
                    {"malformed_frames", counts.malformed_frames},
                    {"events_dropped", counts.events_dropped},
-                   {"nodes_lost", nodes_lost},
+                   {"nodes_lost", counts.heartbeats_lost},
                    {"error_state", drivers::to_string(bus->error_state())}};
   };
   hooks.print = [&] {
@@ -425,9 +369,9 @@ int control_over_can(ControlParts& parts) {
         static_cast<unsigned long long>(bus->counters().frames_sent),
         static_cast<unsigned long long>(master.counters().frames_handled),
         static_cast<unsigned long long>(master.counters().send_failures),
-        static_cast<unsigned long long>(nodes_lost));
+        static_cast<unsigned long long>(master.counters().heartbeats_lost));
   };
-  hooks.peer_lost = [&] { return nodes_lost > 0; };
+  hooks.peer_lost = [&] { return master.counters().heartbeats_lost > 0; };
   return run_control(parts, io, hooks);
 }
 

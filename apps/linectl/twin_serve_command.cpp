@@ -137,10 +137,11 @@ class DdsLink final : public ControllerLink {
 // the real devices (issue 5 item 4).
 class CanLink final : public ControllerLink {
  public:
-  CanLink(const std::string& interface_name, const drivers::CanConfig& config)
-      : bus_(drivers::SocketCanOptions{interface_name, {}, true, false, 0}),
+  // On config.interface_name.
+  explicit CanLink(const drivers::CanConfig& config)
+      : bus_(drivers::SocketCanOptions{config.interface_name, {}, true, false, 0}),
         devices_(bus_, config),
-        interface_name_(interface_name) {}
+        interface_name_(config.interface_name) {}
   // The controller is there when its master sends SYNC: its scan runs (start-up is over).
   bool controller_present() override { return syncs() > 0; }
   [[nodiscard]] std::string how_to_connect() const override {
@@ -253,7 +254,7 @@ int twin_serve_command(const TwinServeArgs& args) {
         drivers::load_can_config(config_or_default(args.can_config, "can.yaml"), line);
     can.interface_name = args.can_interface;
     try {
-      link = std::make_unique<CanLink>(args.can_interface, can);
+      link = std::make_unique<CanLink>(can);
     } catch (const drivers::SocketCanError& error) {
       spdlog::error("twin: --can {}: {}", args.can_interface, error.what());
       return 2;

@@ -267,6 +267,7 @@ void CanopenIo::check_timeouts(std::int64_t now_ns) {
   for (NodeRuntime& node : nodes_) {
     if (node.heard && !node.lost && now_ns - node.last_heartbeat_ns > node.timeout_ns) {
       node.lost = true;
+      ++counters_.heartbeats_lost;
       push_event(CanopenEventKind::kHeartbeatLost, node.id, now_ns, 0);
     }
   }

@@ -188,6 +188,7 @@ TEST(CanopenIo, LostDriveFaultsWithinItsTimeoutAndRecovers) {
   EXPECT_LE(fault_at - silent_since, 150'000'000 + 2 * LoopbackRig::kCycleNs);
   EXPECT_GE(fault_at - silent_since, 100'000'000 - LoopbackRig::kCycleNs);
   EXPECT_TRUE(rig.io.drive_status(DriveId::kCentring).lost);
+  EXPECT_EQ(rig.io.counters().heartbeats_lost, 1U);  // the one silent node, once
   EXPECT_FALSE(rig.in.drives[index(DriveId::kCentring)].ready);
   EXPECT_FALSE(rig.in.drives[index(DriveId::kGuide)].fault);  // the others carry on
 

@@ -4,23 +4,32 @@ namespace fl::drivers::dds {
 
 DdsProcessIo::DdsProcessIo(DdsCameraInput& cameras, DdsSensorInput& sensors, DdsLineOutput& output,
                            DdsProcessIoOptions options)
-    : cameras_(cameras), sensors_(sensors), output_(output), options_(options) {}
+    : cameras_(cameras), sensors_(&sensors), output_(output), options_(options) {}
+
+DdsProcessIo::DdsProcessIo(DdsCameraInput& cameras, ProcessIo& devices, DdsLineOutput& output)
+    : cameras_(cameras), devices_(&devices), output_(output), options_() {}
 
 void DdsProcessIo::read(std::int64_t now_ns, InputImage& in) {
   scan_ns_ = now_ns;
-  cameras_.read(in, stamps_);
-  sensors_.read(in);
-  // Both stamps are CLOCK_MONOTONIC; the arrival may be a little after the scheduled time.
-  const std::int64_t arrival_ns = sensors_.last_sensors_arrival_ns();
-  const bool stale = arrival_ns == 0 || now_ns - arrival_ns > options_.sensors_stale_ns;
-  if (stale) {
-    in.estop_ok = false;
-    stale_scans_.fetch_add(1, std::memory_order_relaxed);
+  if (devices_ != nullptr) {
+    devices_->read(now_ns, in);
+    cameras_.read(in, stamps_);
+  } else {
+    cameras_.read(in, stamps_);
+    sensors_->read(in);
+    // Both stamps are CLOCK_MONOTONIC; the arrival may be a little after the scheduled time.
+    const std::int64_t arrival_ns = sensors_->last_sensors_arrival_ns();
+    const bool stale = arrival_ns == 0 || now_ns - arrival_ns > options_.sensors_stale_ns;
+    if (stale) {
+      in.estop_ok = false;
+      stale_scans_.fetch_add(1, std::memory_order_relaxed);
+    }
   }
   last_scan_ns_.store(now_ns, std::memory_order_relaxed);
 }
 
 void DdsProcessIo::write(const OutputImage& out) {
+  if (devices_ != nullptr) devices_->write(out);  // the drives' commands first
   output_.write(scan_ns_, out, stamps_);
   stamps_.fresh_mask = 0;  // a frame's reaction is the first command after it, only
   faults_.store(out.active_faults, std::memory_order_relaxed);

@@ -65,6 +65,7 @@ struct CanopenCounters {
   std::uint64_t events_dropped = 0;    // event ring full: the consumer is too slow
   std::uint64_t send_failures = 0;     // RPDO or SYNC not queued
   std::uint64_t syncs_sent = 0;
+  std::uint64_t heartbeats_lost = 0;  // nodes that passed their heartbeat timeout (each time)
 };
 
 // What a node looks like to the master now.

@@ -1,6 +1,8 @@
-// The controller's whole process image over DDS: a ProcessIo for the real ScanRuntime that
-// reads camera estimates (DdsCameraInput), sensors and drive feedback (DdsSensorInput) and
-// writes commands and status (DdsLineOutput). The scan thread never calls Cyclone: read()
+// The controller's process image with DDS: a ProcessIo for the real ScanRuntime that reads
+// camera estimates (DdsCameraInput) and writes commands and status (DdsLineOutput). The line's
+// sensors and drive feedback come either over DDS too (DdsSensorInput: the twin's topics) or
+// from the line's devices through another ProcessIo (the CANopen master, read before the
+// cameras and written before the DDS command). The scan thread never calls Cyclone: read()
 // and write() only copy from and into the parts' triple buffers (docs/dds.md, "Real-time
 // contract"), so this composite keeps their guarantees.
 //
@@ -32,6 +34,8 @@ class DdsProcessIo final : public ProcessIo {
  public:
   DdsProcessIo(DdsCameraInput& cameras, DdsSensorInput& sensors, DdsLineOutput& output,
                DdsProcessIoOptions options = {});
+  // The line's devices on `devices` (it owns their safe reactions); no sensor staleness here.
+  DdsProcessIo(DdsCameraInput& cameras, ProcessIo& devices, DdsLineOutput& output);
 
   // Scan thread, real-time.
   void read(std::int64_t now_ns, InputImage& in) override;
@@ -45,14 +49,15 @@ class DdsProcessIo final : public ProcessIo {
   [[nodiscard]] std::int64_t last_scan_time_ns() const noexcept {
     return last_scan_ns_.load(std::memory_order_relaxed);
   }
-  // Scans that saw the sensors stale (and so the safety chain open).
+  // Scans that saw the sensors stale (and so the safety chain open); 0 with `devices`.
   [[nodiscard]] std::uint64_t sensors_stale_scans() const noexcept {
     return stale_scans_.load(std::memory_order_relaxed);
   }
 
  private:
   DdsCameraInput& cameras_;
-  DdsSensorInput& sensors_;
+  DdsSensorInput* sensors_ = nullptr;  // exactly one of these two
+  ProcessIo* devices_ = nullptr;
   DdsLineOutput& output_;
   const DdsProcessIoOptions options_;
   FrameStamps stamps_{};      // scan thread's own: the frames this scan read
