@@ -98,6 +98,9 @@ void wait_for_scanning(const fs::path& control_log) {
   std::this_thread::sleep_for(std::chrono::seconds(8));
 }
 
+// This binary: the children are its own `control` and `twin serve`.
+std::string self() { return fs::read_symlink("/proc/self/exe").string(); }
+
 // Both processes for 60 s of feeding (never reached), each writing its JSON into `dir`,
 // returned once the controller's scan has run 8 s: for the tests that kill one of them.
 struct RunningPair {
@@ -107,12 +110,11 @@ struct RunningPair {
 
 RunningPair start_pair(const fs::path& dir, const std::vector<std::string>& environment) {
   fs::create_directories(dir);
-  const std::string self = fs::read_symlink("/proc/self/exe").string();
   RunningPair run;
-  run.twin = spawn({self, "twin", "serve", "--plant", "fast", "--seed", "1", "--can", kInterface,
+  run.twin = spawn({self(), "twin", "serve", "--plant", "fast", "--seed", "1", "--can", kInterface,
                     "--duration", "60s", "--wait", "60s", "--json", (dir / "twin.json").string()},
                    dir / "twin.log", environment);
-  run.control = spawn({self, "control", "--can", kInterface, "--duration", "60s", "--wait", "60s",
+  run.control = spawn({self(), "control", "--can", kInterface, "--duration", "60s", "--wait", "60s",
                        "--json", (dir / "control.json").string()},
                       dir / "control.log", environment);
   wait_for_scanning(dir / "control.log");
@@ -145,7 +147,6 @@ class CanTwoProcess : public ::testing::Test {
     return {"FL_CONFIG_DIR=" + (kWorkDir / "config").string(),
             "CYCLONEDDS_URI=file://" + (kWorkDir / "config" / "cyclonedds.xml").string()};
   }
-  static std::string self() { return fs::read_symlink("/proc/self/exe").string(); }
 };
 
 TEST_F(CanTwoProcess, ControlAndTwinRunTheLineOverVcan) {
