@@ -54,15 +54,6 @@ std::optional<WorkbenchInputs> load_inputs(const CompareArgs& args) {
   inputs.common.base_spec = dem::load_model_spec(dem_config);
   inputs.common.sub_particle_radius_m = args.radius_mm * 1e-3;
   inputs.common.thread_count = args.threads;
-  if (inputs.dataset.experiment != ExperimentType::kCompress &&
-      inputs.dataset.experiment != ExperimentType::kSlide &&
-      inputs.dataset.experiment != ExperimentType::kDrop &&
-      inputs.dataset.experiment != ExperimentType::kLineTracks) {
-    spdlog::error(
-        "{}: the twin does not reproduce {} datasets yet (compress, slide, drop, line_tracks)",
-        args.dataset, to_string(inputs.dataset.experiment));
-    return std::nullopt;
-  }
   return inputs;
 }
 
@@ -96,10 +87,11 @@ CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args) {
   dataset->require_subcommand(1);
   CLI::App* generate = dataset->add_subcommand(
       "generate",
-      "write a synthetic compress, slide, drop or line_tracks dataset with a hidden effect");
+      "write a synthetic compress, slide, bend, drop or line_tracks dataset with a hidden effect");
   generate->add_option("--out", args.out, "dataset folder to write")->required();
-  generate->add_option("--experiment", args.experiment, "compress, slide, drop or line_tracks")
-      ->check(CLI::IsMember({"compress", "slide", "drop", "line_tracks"}));
+  generate
+      ->add_option("--experiment", args.experiment, "compress, slide, bend, drop or line_tracks")
+      ->check(CLI::IsMember({"compress", "slide", "bend", "drop", "line_tracks"}));
   generate->add_option("--effect", args.effect, "random, none, or an effect law");
   generate->add_option("--seed", args.seed, "random seed (effect, parameters, noise)");
   generate->add_option("--force-noise-n", args.force_noise_n, "1-sigma force noise in N")
@@ -107,6 +99,8 @@ CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args) {
   generate->add_option("--angle-noise-deg", args.angle_noise_deg, "slide: 1-sigma angle noise")
       ->check(CLI::Range(0.0, 10.0));
   generate->add_option("--height-noise-mm", args.height_noise_mm, "drop: 1-sigma height noise")
+      ->check(CLI::Range(0.0, 10.0));
+  generate->add_option("--bend-noise-deg", args.bend_angle_noise_deg, "bend: 1-sigma angle noise")
       ->check(CLI::Range(0.0, 10.0));
   generate
       ->add_option("--position-noise-mm", args.position_noise_mm,
@@ -125,6 +119,7 @@ int generate_command(const GenerateArgs& args) {
   options.force_noise_n = args.force_noise_n;
   options.angle_noise_deg = args.angle_noise_deg;
   options.height_noise_mm = args.height_noise_mm;
+  options.bend_angle_noise_deg = args.bend_angle_noise_deg;
   options.position_noise_mm = args.position_noise_mm;
   options.fillets_per_trial = args.fillets_per_trial;
   options.common.base_spec = dem::load_model_spec(default_config("dem.yaml"));
@@ -140,8 +135,14 @@ int generate_command(const GenerateArgs& args) {
 int diagnose_command(const CompareArgs& args) {
   const std::optional<WorkbenchInputs> inputs = load_inputs(args);
   if (!inputs) return 2;
-  const Diagnosis diagnosis =
-      diagnose(inputs->dataset, inputs->common, candidates_for(inputs->dataset.experiment));
+  std::vector<EffectCandidate> candidates;
+  try {
+    candidates = candidates_for(inputs->dataset.experiment);
+  } catch (const std::invalid_argument& error) {
+    spdlog::error("{}: {}", args.dataset, error.what());
+    return 2;
+  }
+  const Diagnosis diagnosis = diagnose(inputs->dataset, inputs->common, candidates);
   const fs::path out = out_folder(args, "diagnose_");
   fs::create_directories(out);
   std::ofstream(out / "diagnosis.json") << diagnosis_json(diagnosis) << "\n";

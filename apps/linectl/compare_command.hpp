@@ -40,6 +40,7 @@ struct GenerateArgs {
   double force_noise_n = 0.01;
   double angle_noise_deg = 0.3;
   double height_noise_mm = 0.5;
+  double bend_angle_noise_deg = 1.0;
   double position_noise_mm = 1.0;
   int fillets_per_trial = 5;
 };

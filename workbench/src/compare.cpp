@@ -187,8 +187,19 @@ CompareReport compare(const Dataset& dataset, TrialModel& model) {
     trace.trial = trial.id;
     trace.phase = phases_of(dataset.experiment, trial);
     const Channel* time = trial.data.find("time");
+    const Channel* opening = trial.data.find("opening");
+    if (time == nullptr) {
+      trace.x_label = opening != nullptr ? "opening (" + std::string(opening->unit.symbol) + ")"
+                                         : std::string("repetition");
+    }
     for (std::size_t k = 0; k < trial.data.rows(); ++k) {
-      trace.time_s.push_back(time != nullptr ? time->values_si[k] : static_cast<double>(k));
+      if (time != nullptr) {
+        trace.time_s.push_back(time->values_si[k]);
+      } else if (opening != nullptr) {
+        trace.time_s.push_back(opening->values_si[k] / opening->unit.to_si);
+      } else {
+        trace.time_s.push_back(static_cast<double>(k));
+      }
     }
     bool usable = true;
     for (const std::string_view name : channels) {

@@ -141,9 +141,20 @@ std::vector<EffectCandidate> candidates_for(ExperimentType type) {
   if (type == ExperimentType::kSlide || type == ExperimentType::kLineTracks) {
     return slide_candidates();
   }
-  // A drop loads the same bonds as a compression, at impact rates: the same bond laws.
-  if (type == ExperimentType::kCompress || type == ExperimentType::kDrop) {
+  // A drop or a settle loads the same bonds as a compression, at impact rates: the same laws.
+  if (type == ExperimentType::kCompress || type == ExperimentType::kDrop ||
+      type == ExperimentType::kSettle) {
     return compress_candidates();
+  }
+  // A bend loads the bonds along the whole fillet, thick rear and thin tip: the bond laws and
+  // stiffness graded with thickness (a reference thickness from the tip's 15 mm to the rear's
+  // 45 mm, an exponent from uniform to cubic, as a plate's bending stiffness goes with t^3).
+  if (type == ExperimentType::kBend) {
+    std::vector<EffectCandidate> candidates = compress_candidates();
+    candidates.push_back({"bpm_graded",
+                          {{"reference_thickness_m", 0.015, 0.045, false},
+                           {"thickness_exponent", 0.0, 3.0, false}}});
+    return candidates;
   }
   throw std::invalid_argument("no effect candidates for " + std::string(to_string(type)) +
                               " datasets");

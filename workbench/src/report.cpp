@@ -54,7 +54,10 @@ std::string report_json(const CompareReport& report) {
   json["cells"] = cells;
   nlohmann::json traces = nlohmann::json::array();
   for (const TrialTrace& trace : report.traces) {
-    nlohmann::json t{{"trial", trace.trial}, {"time_s", trace.time_s}, {"phase", trace.phase}};
+    nlohmann::json t{{"trial", trace.trial},
+                     {"time_s", trace.time_s},
+                     {"x_label", trace.x_label},
+                     {"phase", trace.phase}};
     for (const ChannelTrace& c : trace.channels) {
       t["channels"][c.channel] = {{"unit", std::string(c.unit.symbol)},
                                   {"measured_si", c.measured_si},
@@ -123,14 +126,14 @@ std::string report_html(const CompareReport& report) {
       const std::string y_label = c.channel + " (" + std::string(c.unit.symbol) + ")";
       report::Plot overlay;
       overlay.title = trace.trial + ": " + c.channel;
-      overlay.x.label = "time (s)";
+      overlay.x.label = trace.x_label;
       overlay.y.label = y_label;
       overlay.series.push_back(
           {"measured", trace.time_s, measured, report::SeriesStyle::kScatter, "#444"});
       overlay.series.push_back({"model", trace.time_s, model, report::SeriesStyle::kLine, "#d62"});
       report::Plot residuals;
       residuals.title = trace.trial + ": " + c.channel + " residual (model - measured)";
-      residuals.x.label = "time (s)";
+      residuals.x.label = trace.x_label;
       residuals.y.label = y_label;
       residuals.series.push_back(
           {"residual", trace.time_s, residual, report::SeriesStyle::kLineAndMarkers, "#36c"});

@@ -13,20 +13,8 @@
 namespace fl::workbench::detail {
 
 std::string_view judged_channel(ExperimentType type) {
-  switch (type) {
-    case ExperimentType::kCompress:
-      return "force";
-    case ExperimentType::kSlide:
-      return "onset_angle";
-    case ExperimentType::kDrop:
-      return "height";
-    case ExperimentType::kLineTracks:
-      return "x";  // along the belt: where a slip shows
-    default:
-      throw std::invalid_argument(
-          "the workbench fits the twin to compress, slide, drop and line_tracks datasets, not " +
-          std::string(to_string(type)));
-  }
+  // The first response channel: for line tracks x, along the belt, where a slip shows.
+  return response_channels(type).front();
 }
 
 Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& common,

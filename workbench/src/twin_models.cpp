@@ -219,19 +219,21 @@ std::string TwinDropModel::describe() const {
 }
 
 Table TwinDropModel::run(const Dataset& dataset, const Trial& trial) {
-  if (dataset.experiment != ExperimentType::kDrop) {
-    throw std::runtime_error("the drop model runs drop datasets, not " +
+  const bool settle = dataset.experiment == ExperimentType::kSettle;
+  if (dataset.experiment != ExperimentType::kDrop && !settle) {
+    throw std::runtime_error("the drop model runs drop and settle datasets, not " +
                              std::string(to_string(dataset.experiment)));
   }
   const auto height = trial.conditions.find("drop_height");
-  if (height == trial.conditions.end()) {
+  if (height == trial.conditions.end() && !settle) {
     throw std::runtime_error("the drop model needs the trial's drop_height condition");
   }
   model_tests::DropParams params;
   params.common = common_;
   params.common.variant = fillet_variant(trial.conditions, common_.variant);
   keep_wet_film_for_wet_trials(params.common.base_spec, trial.conditions);
-  params.drop_height_m = std::get<double>(height->second);
+  // Settle: no height, so run_drop releases the fillet 1 mm over the plate.
+  params.drop_height_m = settle ? 0.0 : std::get<double>(height->second);
   params.speed_m_per_s = 0.0;  // released at rest, also from 0 height (1 mm up)
   params.orientation = Eigen::Quaterniond::Identity();  // flat, as the fillet lies on a belt
   params.height_times_s = trial.data.at("time").values_si;
@@ -244,6 +246,104 @@ Table TwinDropModel::run(const Dataset& dataset, const Trial& trial) {
   }
   Table table;
   table.channels.push_back({"height", trial.data.at("height").unit, result.centre_height_m});
+  table.lines = trial.data.lines;
+  return table;
+}
+
+TwinBendModel::TwinBendModel(model_tests::CommonParams common, BendSettings settings)
+    : common_(std::move(common)), settings_(settings) {
+  if (common_.base_spec.materials.empty()) common_.base_spec = dem::appendix_b_model_spec();
+}
+
+std::string TwinBendModel::describe() const {
+  std::ostringstream text;
+  text << "DEM twin, flexible fillet of " << common_.sub_particle_radius_m * 1e3
+       << " mm sub-particles over a table edge; bond law " << bond_law_text(common_.base_spec);
+  return text.str();
+}
+
+Table TwinBendModel::run(const Dataset& dataset, const Trial& trial) {
+  if (dataset.experiment != ExperimentType::kBend) {
+    throw std::runtime_error("the bend model runs bend datasets, not " +
+                             std::string(to_string(dataset.experiment)));
+  }
+  const auto overhang = trial.conditions.find("overhang");
+  if (overhang == trial.conditions.end()) {
+    throw std::runtime_error("the bend model needs the trial's overhang condition");
+  }
+  model_tests::BendParams params;
+  params.common = common_;
+  params.common.variant = fillet_variant(trial.conditions, common_.variant);
+  keep_wet_film_for_wet_trials(params.common.base_spec, trial.conditions);
+  const double length_m = 2.0 * model_tests::make_fillet(params.common).half_extent_m.x();
+  const double overhang_m = std::get<double>(overhang->second);
+  if (!(overhang_m > 0.0 && overhang_m < length_m)) {
+    std::ostringstream reason;
+    reason << "the bend model needs an overhang inside the fillet's length: " << overhang_m * 1e3
+           << " mm of a " << length_m * 1e3 << " mm fillet";
+    throw std::runtime_error(reason.str());
+  }
+  params.overhang_share = overhang_m / length_m;
+  params.duration_s = settings_.duration_s;
+  params.clamp_behind_edge_m = settings_.clamp_behind_edge_m;
+  const model_tests::BendResult result = model_tests::run_bend(params);
+  if (result.slid_off || !std::isfinite(result.angle_deg)) {
+    throw std::runtime_error("the bend model's fillet slid off the table");
+  }
+  constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+  Table table;
+  table.channels.push_back({"bend_angle", trial.data.at("bend_angle").unit,
+                            std::vector<double>(trial.data.rows(), result.angle_deg * kRadPerDeg)});
+  table.lines = trial.data.lines;
+  return table;
+}
+
+TwinBulkFlowModel::TwinBulkFlowModel(model_tests::CommonParams common, BulkFlowSettings settings)
+    : common_(std::move(common)), settings_(std::move(settings)) {
+  if (common_.base_spec.materials.empty()) common_.base_spec = dem::appendix_b_model_spec();
+}
+
+std::string TwinBulkFlowModel::describe() const {
+  std::ostringstream text;
+  text << "DEM twin, mailbox hopper of " << settings_.scene.feeder.initial_fill
+       << " bonded fillets of " << common_.sub_particle_radius_m * 1e3
+       << " mm sub-particles over the bulk belt; mass under the gate over " << settings_.measure_s
+       << " s; fillet-equipment laws:" << equipment_chain_text(common_.base_spec);
+  return text.str();
+}
+
+Table TwinBulkFlowModel::run(const Dataset& dataset, const Trial& trial) {
+  if (dataset.experiment != ExperimentType::kBulkFlow) {
+    throw std::runtime_error("the bulk-flow model runs bulk_flow datasets, not " +
+                             std::string(to_string(dataset.experiment)));
+  }
+  BulkDemConfig config = settings_.scene;
+  config.engine = common_.base_spec;
+  keep_wet_film_for_wet_trials(config.engine, trial.conditions);
+  config.simulation.sub_particle_radius_mm = common_.sub_particle_radius_m * 1e3;
+  config.simulation.thread_count = common_.thread_count;
+  const auto speed = trial.conditions.find("belt_speed");
+  if (speed != trial.conditions.end()) config.belt.speed_mps = std::get<double>(speed->second);
+  const std::vector<double>& opening_m = trial.data.at("opening").values_si;
+  std::vector<double> openings_mm;
+  for (const double opening : opening_m) {
+    const double opening_mm = opening * 1e3;
+    if (opening_mm < config.gate.min_opening_mm || opening_mm > config.gate.max_opening_mm) {
+      std::ostringstream reason;
+      reason << "the bulk-flow model's gate opens " << config.gate.min_opening_mm << " to "
+             << config.gate.max_opening_mm << " mm, not " << opening_mm << " mm";
+      throw std::runtime_error(reason.str());
+    }
+    openings_mm.push_back(opening_mm);
+  }
+  const std::vector<GateSweepPoint> points = sweep_gate_opening(
+      config, openings_mm, GateSweepOptions{settings_.settle_s, settings_.measure_s});
+  Table table;
+  Channel outflow{"outflow", trial.data.at("outflow").unit, {}};
+  for (const GateSweepPoint& point : points) {
+    outflow.values_si.push_back(point.gate_mass_flow_kg_per_s);
+  }
+  table.channels.push_back(std::move(outflow));
   table.lines = trial.data.lines;
   return table;
 }
@@ -335,13 +435,17 @@ std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
     case ExperimentType::kSlide:
       return std::make_unique<TwinSlideModel>(common);
     case ExperimentType::kDrop:
+    case ExperimentType::kSettle:
       return std::make_unique<TwinDropModel>(common);
+    case ExperimentType::kBend:
+      return std::make_unique<TwinBendModel>(common);
     case ExperimentType::kLineTracks:
       return std::make_unique<TwinLineTracksModel>(common);
-    default:
-      throw std::invalid_argument("the twin does not reproduce " +
-                                  std::string(to_string(experiment)) + " datasets yet");
+    case ExperimentType::kBulkFlow:
+      return std::make_unique<TwinBulkFlowModel>(common);
   }
+  throw std::invalid_argument("the twin has no model of experiment type " +
+                              std::to_string(static_cast<int>(experiment)));
 }
 
 }  // namespace fl::workbench

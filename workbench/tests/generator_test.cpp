@@ -83,7 +83,21 @@ TEST(Generator, RefusesWhatItCannotMake) {
   options.effect = "magic";
   EXPECT_THROW((void)generate_dataset(options), std::invalid_argument);
   options.effect = "none";
+  // Settle: no effect in reach moves a fillet released at rest by what a camera sees; bulk flow
+  // is not generated. Each refusal says which types it makes.
+  for (const ExperimentType type : {ExperimentType::kSettle, ExperimentType::kBulkFlow}) {
+    options.experiment = type;
+    try {
+      (void)generate_dataset(options);
+      ADD_FAILURE() << to_string(type) << " was generated";
+    } catch (const std::invalid_argument& error) {
+      EXPECT_NE(std::string(error.what()).find(to_string(type)), std::string::npos)
+          << error.what();
+    }
+  }
+  // A bend effect is not a compress one.
   options.experiment = ExperimentType::kBend;
+  options.effect = "bpm_plastic";
   EXPECT_THROW((void)generate_dataset(options), std::invalid_argument);
 }
 

@@ -92,6 +92,30 @@ inline double height_score(const Dataset& data, const HiddenEffect& effect) {
   return compare(data, model).overall("height").score;
 }
 
+// Angle noise of the generated bend datasets (the generator's default: an angle read off a
+// side photo), in degrees.
+inline constexpr double kBendNoiseDeg = 1.0;
+
+// A bend dataset (the three variants over the edge by 60, 80 and 100 mm, 10 repetitions) with
+// `effect` hidden in it.
+inline GeneratedDataset generate_bend(const std::string& effect, std::uint64_t seed = 3) {
+  GeneratorOptions options;
+  options.experiment = ExperimentType::kBend;
+  options.seed = seed;
+  options.effect = effect;
+  options.bend_angle_noise_deg = kBendNoiseDeg;
+  options.common = base_model();
+  return generate_dataset(options);
+}
+
+// The overall bend-angle score of the bend twin with the bond `effect` added.
+inline double bend_score(const Dataset& data, const HiddenEffect& effect) {
+  model_tests::CommonParams common = base_model();
+  common.base_spec = with_bond_effect(common.base_spec, effect);
+  TwinBendModel model(common);
+  return compare(data, model).overall("bend_angle").score;
+}
+
 // Issue 6's proof on a dataset made with a hidden effect: diagnose ranks that effect first and
 // proposes it, and adding it as fitted makes the error fall by 70 % or more and end within
 // twice the noise. `score(data, effect)`: the overall score (RMS over noise) of the channel.

@@ -269,6 +269,7 @@ void BulkScene::count_and_remove() {
     if (!f.passed_gate && f.centroid_m.x() >= gate_x) {
       f.passed_gate = true;
       ++counters_.passed_gate;
+      counters_.passed_gate_mass_kg += mass;
       gate_events_.push_back({now, mass});
     }
     // Past the edge, or fallen off the scene (under the belt plane): out of the engine.
@@ -553,6 +554,8 @@ std::vector<GateSweepPoint> sweep_gate_opening(const BulkDemConfig& config,
     p.outflow_per_s = static_cast<double>(p.discharged) / options.measure_s;
     p.mass_flow_kg_per_s =
         (after.discharged_mass_kg - before.discharged_mass_kg) / options.measure_s;
+    p.gate_mass_flow_kg_per_s =
+        (after.passed_gate_mass_kg - before.passed_gate_mass_kg) / options.measure_s;
     p.leveller_torque_nm = scene.leveller_load_mean().torque_nm;
     p.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     points.push_back(p);

@@ -89,6 +89,36 @@ TEST(DropTwin, RefusesATrialItCannotReproduce) {
   EXPECT_THROW((void)model.run(data, data.trials.front()), std::runtime_error);
 }
 
+TEST(SettleTwin, ComesToRestWhereItWasReleased) {
+  // A settle trial: released at rest lying flat, tracked every 5 ms for 0.5 s.
+  Dataset data;
+  data.experiment = ExperimentType::kSettle;
+  Trial trial;
+  trial.id = "s";
+  trial.conditions["variant"] = std::string("172x72x32");
+  std::vector<double> t;
+  for (int row = 0; row <= 100; ++row) t.push_back(0.005 * row);
+  trial.data.channels = {{"time", *find_unit("s"), t},
+                         {"height", *find_unit("mm"), std::vector<double>(t.size())}};
+  trial.data.lines.resize(t.size());
+  data.trials.push_back(trial);
+  TwinDropModel model(base_model());
+  const std::vector<double> height = model.run(data, trial).at("height").values_si;
+  ASSERT_EQ(height.size(), t.size());
+  // Released with its lowest point 1 mm over the plate: it falls that millimetre and sags a
+  // fraction of one under its own weight, so every height stays within 2 mm below the first
+  // and never above it by more than the integrator's rounding.
+  for (const double h : height) {
+    EXPECT_LT(h, height.front() + 1e-6);
+    EXPECT_GT(h, height.front() - 0.002);
+  }
+  // At rest after 0.5 s: the last 0.1 s moves by under 0.2 mm (under half the camera noise).
+  for (std::size_t k = 80; k < height.size(); ++k) EXPECT_NEAR(height[k], height.back(), 2e-4);
+  // A settle trial needs no drop_height: the same model refuses a drop without one.
+  data.experiment = ExperimentType::kDrop;
+  EXPECT_THROW((void)model.run(data, trial), std::runtime_error);
+}
+
 TEST(DropGenerator, DatasetRoundTripsThroughTheMeasurementFormat) {
   const GeneratedDataset made = generate_drop("none");
   const auto folder = std::filesystem::temp_directory_path() / "fl_drop_round_trip";

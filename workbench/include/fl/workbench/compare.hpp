@@ -47,7 +47,9 @@ struct ChannelTrace {
 
 struct TrialTrace {
   std::string trial;
-  std::vector<double> time_s;  // or the row number when the experiment has no time
+  // The plots' x: time in s; bulk flow: the opening in the file's unit; else the row number.
+  std::vector<double> time_s;
+  std::string x_label = "time (s)";
   std::vector<std::string> phase;
   std::vector<ChannelTrace> channels;
 };

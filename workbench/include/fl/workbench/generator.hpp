@@ -32,15 +32,19 @@ std::vector<std::string> compress_effect_candidates();
 std::vector<std::string> slide_effect_candidates();
 // The effects a drop test can reveal (bond laws, as compression), with ranges for a drop.
 std::vector<std::string> drop_effect_candidates();
+// The effects a bend test can reveal: stiffness graded with thickness.
+std::vector<std::string> bend_effect_candidates();
 
 struct GeneratorOptions {
-  ExperimentType experiment = ExperimentType::kCompress;  // compress, slide, drop, line_tracks
+  // Any type but settle (nothing a camera sees hides in it) and bulk_flow.
+  ExperimentType experiment = ExperimentType::kCompress;
   std::uint64_t seed = 1;
   // "random": one of the experiment's candidates; "none"; or a law name from the candidates.
   std::string effect = "random";
-  double force_noise_n = 0.01;   // compress: 1 sigma, Gaussian; written into the manifest
-  double angle_noise_deg = 0.3;  // slide: 1 sigma on each onset angle (an inclinometer's)
-  double height_noise_mm = 0.5;  // drop: 1 sigma on each tracked height (a 200 fps camera's)
+  double force_noise_n = 0.01;        // compress: 1 sigma, Gaussian; written into the manifest
+  double angle_noise_deg = 0.3;       // slide: 1 sigma on each onset angle (an inclinometer's)
+  double height_noise_mm = 0.5;       // drop: 1 sigma on each tracked height (a 200 fps camera's)
+  double bend_angle_noise_deg = 1.0;  // bend: 1 sigma on each angle (read off a side photo)
   // Line tracks: 1 sigma on each camera position (x, y) and angle; fillets per trial.
   double position_noise_mm = 1.0;
   double track_angle_noise_deg = 1.0;
@@ -49,9 +53,10 @@ struct GeneratorOptions {
   // 172x72x32, 176x72x40), each dry then wet, so the last of an even count is wet. 0: the
   // experiment's default (compress 3, slide 4). Drop: heights 50, 100, 200 mm, ... (doubling)
   // with rows every 5 ms to 0.4 s after the impact; default 3. Line tracks: takt accelerations
-  // 4 then 7 m/s^2 to 1.5 m/s, each dry then wet (default 4 trials, 20 fillets).
+  // 4 then 7 m/s^2 to 1.5 m/s, each dry then wet (default 4 trials, 20 fillets). Bend: the
+  // variants in turn over the edge by 60, 80, 100 mm (+10 mm each round); default 3.
   int trials = 0;
-  int repetitions = 10;              // slide: onset angles (rows) per trial
+  int repetitions = 10;              // slide, bend: angles (rows) per trial
   model_tests::CommonParams common;  // the base model (appendix B, 7 mm) the effect joins
 };
 

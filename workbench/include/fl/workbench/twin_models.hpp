@@ -6,6 +6,7 @@
 
 #include <memory>
 
+#include "fl/twin/dem_bulk/bulk_scene.hpp"
 #include "fl/twin/model_tests/fixtures.hpp"
 #include "fl/workbench/compare.hpp"
 
@@ -57,6 +58,8 @@ class TwinSlideModel final : public TrialModel {
 // sphere centres) above the plate at every measured time. The time column counts from the
 // release. Bond laws (and effects among them) and the fillet-equipment laws are the spec's; a
 // wet_film law acts on surface=wet trials only, as in the slide model.
+// It also runs settle datasets: the same fillet released at rest with its lowest point 1 mm
+// over the plate (a settle trial has no drop_height), sagging and ringing into its rest.
 class TwinDropModel final : public TrialModel {
  public:
   explicit TwinDropModel(model_tests::CommonParams common);
@@ -65,6 +68,58 @@ class TwinDropModel final : public TrialModel {
 
  private:
   model_tests::CommonParams common_;
+};
+
+// How the bend twin holds its fillet: bend test (thesis 3.4.1, figure 3.11). 2 s is the thesis'
+// run; the answer is the mean angle over its last quarter (the bonds have no damping of their
+// own, so an undamped fillet swings about that mean).
+struct BendSettings {
+  double duration_s = 2.0;
+  double clamp_behind_edge_m = 0.03;  // spheres further behind the edge are held (a hand)
+};
+
+// Bend test: a fillet of the trial's `variant` and `mirrored` flag lying flat on a table of the
+// equipment material with `overhang` of its length beyond the edge bends down under its own
+// weight. The answer, the same on every row (repetitions), is the angle through which the chord
+// from the edge section to the tip turned down from the horizontal (0 rigid, 90 hanging
+// straight down, above 90 curling back under the table). Throws std::runtime_error when the
+// overhang is not inside the fillet's length or the fillet slid off the table.
+class TwinBendModel final : public TrialModel {
+ public:
+  explicit TwinBendModel(model_tests::CommonParams common, BendSettings settings = {});
+  [[nodiscard]] std::string describe() const override;
+  Table run(const Dataset& dataset, const Trial& trial) override;
+
+ private:
+  model_tests::CommonParams common_;
+  BendSettings settings_;
+};
+
+// The bulk twin's scene and counting window (thesis 6.1, the mailbox outflow): the scene's
+// geometry, feed and seed from `scene` (config/bulk_dem.yaml's defaults), its engine laws and
+// sub-particle radius from the model's CommonParams. After `settle_s` with the gate standing at
+// the opening, the mass of the fillets whose centre passed under the gate over `measure_s` is the
+// outflow (the discharge edge is 0.9 m on: 4.5 s away at 0.2 m/s).
+struct BulkFlowSettings {
+  BulkDemConfig scene = default_bulk_dem_config();
+  double settle_s = 0.5;  // the initial fill falls 0.3 m and comes to rest
+  double measure_s = 2.0;
+};
+
+// Bulk flow: one row per gate opening; each row is a fresh bulk scene with the gate at that
+// opening and the belt at the trial's `belt_speed` (absent: the scene's); the answer is the
+// mass flow out of the mailbox, under its gate. The fed fillets are the six variants drawn by the
+// scene's seed (a variant condition does not narrow them: a bulk is mixed). A wet_film law acts on
+// surface=wet trials only, as in the slide model.
+class TwinBulkFlowModel final : public TrialModel {
+ public:
+  explicit TwinBulkFlowModel(model_tests::CommonParams common, BulkFlowSettings settings = {});
+  [[nodiscard]] std::string describe() const override;
+  Table run(const Dataset& dataset, const Trial& trial) override;
+
+ private:
+  model_tests::CommonParams common_;
+  BulkFlowSettings settings_;
 };
 
 // Line tracks (the line's cameras following fillets on a belt): every fillet of the trial
@@ -84,8 +139,8 @@ class TwinLineTracksModel final : public TrialModel {
   model_tests::CommonParams common_;
 };
 
-// The twin of an experiment type (compress, slide, drop, line_tracks): what compare, diagnose and
-// the generator run. Throws std::invalid_argument for a type the twin does not reproduce yet.
+// The twin of an experiment type (every type of the measurement format): what compare, diagnose
+// and the generator run.
 std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
                                             const model_tests::CommonParams& common);
 

@@ -107,7 +107,8 @@ struct BulkFilletView {
 struct BulkCounters {
   std::uint64_t fed = 0;
   std::uint64_t passed_gate = 0;  // centroid crossed the gate's plane downstream
-  std::uint64_t discharged = 0;   // centroid past the discharge edge (removed)
+  double passed_gate_mass_kg = 0.0;
+  std::uint64_t discharged = 0;  // centroid past the discharge edge (removed)
   double discharged_mass_kg = 0.0;
   std::uint64_t rebuilds = 0;  // engine rebuilt to take fillets out
 };
@@ -227,9 +228,10 @@ struct GateSweepOptions {
 };
 struct GateSweepPoint {
   double opening_mm = 0.0;
-  double gate_passes_per_s = 0.0;  // fillets under the gate per second over measure_s
-  double outflow_per_s = 0.0;      // past the discharge edge per second over measure_s
-  double mass_flow_kg_per_s = 0.0;
+  double gate_passes_per_s = 0.0;        // fillets under the gate per second over measure_s
+  double outflow_per_s = 0.0;            // past the discharge edge per second over measure_s
+  double mass_flow_kg_per_s = 0.0;       // past the discharge edge
+  double gate_mass_flow_kg_per_s = 0.0;  // under the gate: the mailbox's outflow
   std::uint64_t gate_passes = 0;
   std::uint64_t discharged = 0;
   double leveller_torque_nm = 0.0;  // mean over measure_s
