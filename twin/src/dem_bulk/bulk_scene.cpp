@@ -504,29 +504,20 @@ LevellerLoad BulkScene::leveller_load() const {
     if (rel.x() * rel.x() + rel.z() * rel.z() > (reach + r) * (reach + r)) continue;
     // Deepest overlap with any rotor triangle (a sphere at a blade root may touch two).
     double overlap = 0.0;
-    Vec3 normal = Vec3::Zero();
-    Vec3 point = Vec3::Zero();
     for (const dem::Triangle& t : rotor_reference_) {
       const dem::ClosestPoint cp =
           dem::closest_point_on_triangle(s.position_m[k], w.place(t.vertices_m[0]),
                                          w.place(t.vertices_m[1]), w.place(t.vertices_m[2]));
-      const Vec3 d = s.position_m[k] - cp.point_m;
-      const double dist = d.norm();
-      if (dist < r && r - dist > overlap && dist > 0.0) {
-        overlap = r - dist;
-        normal = d / dist;
-        point = cp.point_m;
-      }
+      const double dist = (s.position_m[k] - cp.point_m).norm();
+      if (dist < r && dist > 0.0) overlap = std::max(overlap, r - dist);
     }
     if (overlap <= 0.0) continue;
-    const double f = 4.0 / 3.0 * pair_e_star_pa_ * std::sqrt(r) * std::pow(overlap, 1.5);
-    load.force_sum_n += f;
-    // Force on the rotor is -f n at the contact point; its torque about +y, signed so that a
-    // load resisting the commanded rotation counts positive.
-    const Vec3 arm = point - axis_point;
-    load.torque_nm += -sign * arm.cross(-f * normal).y();
+    load.force_sum_n += 4.0 / 3.0 * pair_e_star_pa_ * std::sqrt(r) * std::pow(overlap, 1.5);
     ++load.contacts;
   }
+  // The wall's torque is about its moved pivot, the rotor axis; signed so that a load resisting
+  // the commanded rotation (about +y for positive rpm) counts positive.
+  load.torque_nm = -sign * s.wall_torque_nm[wall_rotor_].y();
   return load;
 }
 

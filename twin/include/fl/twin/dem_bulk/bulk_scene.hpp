@@ -115,8 +115,10 @@ struct BulkCounters {
 
 // Rotor load from the contacts on the blades and hub (see leveller_load()).
 struct LevellerLoad {
-  double force_sum_n = 0.0;  // sum of the contact normal force magnitudes
-  double torque_nm = 0.0;    // about the rotor axis; > 0 opposes the commanded rotation
+  double force_sum_n = 0.0;  // sum of the contacts' elastic normal force magnitudes
+  // The engine's reaction on the rotor wall about its axis (every law of the chain: elastic,
+  // damping, friction, adhesion), as EDEM's geometry torque; > 0 opposes the commanded rotation.
+  double torque_nm = 0.0;
   std::size_t contacts = 0;  // spheres touching the rotor
 };
 
@@ -162,9 +164,10 @@ class BulkScene {
   [[nodiscard]] double outflow_rate_per_s(double window_s) const;
   [[nodiscard]] double mass_flow_kg_per_s(double window_s) const;
   [[nodiscard]] double gate_pass_rate_per_s(double window_s) const;
-  // Torque proxy of the leveller: the engine reports no per-wall reaction, so the scene
-  // recomputes the Hertz normal force of every sphere overlapping a rotor triangle
-  // (F = 4/3 E* sqrt(R) overlap^1.5, the law chain's elastic part) at the end of a step.
+  // Load on the leveller at the end of the last engine step: the torque is the engine's
+  // reaction on the rotor wall (dem::State::wall_torque_nm); the contact count and force sum
+  // are recounted from the spheres overlapping a rotor triangle (Hertz elastic part,
+  // F = 4/3 E* sqrt(R) overlap^1.5), which the engine does not keep per wall.
   [[nodiscard]] LevellerLoad leveller_load() const;
   // Mean of leveller_load() over the control steps of the last step() call.
   [[nodiscard]] LevellerLoad leveller_load_mean() const { return load_mean_; }
