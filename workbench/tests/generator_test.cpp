@@ -91,8 +91,7 @@ TEST(Generator, RefusesWhatItCannotMake) {
       (void)generate_dataset(options);
       ADD_FAILURE() << to_string(type) << " was generated";
     } catch (const std::invalid_argument& error) {
-      EXPECT_NE(std::string(error.what()).find(to_string(type)), std::string::npos)
-          << error.what();
+      EXPECT_NE(std::string(error.what()).find(to_string(type)), std::string::npos) << error.what();
     }
   }
   // A bend effect is not a compress one.
