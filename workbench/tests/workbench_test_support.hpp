@@ -17,8 +17,15 @@
 
 namespace fl::workbench::test {
 
-// Force noise of the generated datasets: about 2 % of the ~0.6 N peak force.
+// Noise of the generated datasets, the generator's defaults. Force: about 2 % of the ~0.6 N
+// peak force of the compression block.
 inline constexpr double kNoiseN = 0.01;
+// Onset angle of the slide: an inclinometer's repeatability, in degrees.
+inline constexpr double kAngleNoiseDeg = 0.3;
+// Height of a drop: a 200 fps camera tracking the fillet, in millimetres.
+inline constexpr double kHeightNoiseMm = 0.5;
+// Bend angle: an angle read off a side photo, in degrees.
+inline constexpr double kBendNoiseDeg = 1.0;
 
 // The appendix B model at the fast 7 mm sub-particle size of the model tests.
 inline model_tests::CommonParams base_model() {
@@ -28,92 +35,62 @@ inline model_tests::CommonParams base_model() {
   return common;
 }
 
-// A compression dataset with `effect` hidden in it ("none": without), on the base model.
-inline GeneratedDataset generate(const std::string& effect, std::uint64_t seed = 3) {
+// A dataset of the generator's default trials of `type` with `effect` hidden in it ("none":
+// without), on the base model.
+inline GeneratedDataset generate_of(ExperimentType type, const std::string& effect,
+                                    std::uint64_t seed) {
   GeneratorOptions options;
+  options.experiment = type;
   options.seed = seed;
   options.effect = effect;
   options.force_noise_n = kNoiseN;
-  options.common = base_model();
-  return generate_dataset(options);
-}
-
-// The overall force score of the base model with `effect` added ({}: the base model itself).
-inline double force_score(const Dataset& data, const HiddenEffect& effect) {
-  model_tests::CommonParams common = base_model();
-  common.base_spec = with_bond_effect(common.base_spec, effect);
-  TwinCompressModel model(common);
-  return compare(data, model).overall("force").score;
-}
-
-// Onset-angle noise of the generated slide datasets (the generator's default, an
-// inclinometer's repeatability), in degrees.
-inline constexpr double kAngleNoiseDeg = 0.3;
-
-// A slide dataset (two variants, dry and wet, 10 repetitions) with `effect` hidden in it.
-inline GeneratedDataset generate_slide(const std::string& effect, std::uint64_t seed = 3) {
-  GeneratorOptions options;
-  options.experiment = ExperimentType::kSlide;
-  options.seed = seed;
-  options.effect = effect;
   options.angle_noise_deg = kAngleNoiseDeg;
-  options.common = base_model();
-  return generate_dataset(options);
-}
-
-// The overall onset-angle score of the slide twin with the contact `effect` added.
-inline double angle_score(const Dataset& data, const HiddenEffect& effect) {
-  model_tests::CommonParams common = base_model();
-  common.base_spec = with_contact_effect(common.base_spec, effect);
-  TwinSlideModel model(common);
-  return compare(data, model).overall("onset_angle").score;
-}
-
-// Height noise of the generated drop datasets (the generator's default, a 200 fps camera
-// tracking the fillet), in millimetres.
-inline constexpr double kHeightNoiseMm = 0.5;
-
-// A drop dataset (50, 100 and 200 mm, flat) with `effect` hidden in it.
-inline GeneratedDataset generate_drop(const std::string& effect, std::uint64_t seed = 3) {
-  GeneratorOptions options;
-  options.experiment = ExperimentType::kDrop;
-  options.seed = seed;
-  options.effect = effect;
   options.height_noise_mm = kHeightNoiseMm;
-  options.common = base_model();
-  return generate_dataset(options);
-}
-
-// The overall height score of the drop twin with the bond `effect` added.
-inline double height_score(const Dataset& data, const HiddenEffect& effect) {
-  model_tests::CommonParams common = base_model();
-  common.base_spec = with_bond_effect(common.base_spec, effect);
-  TwinDropModel model(common);
-  return compare(data, model).overall("height").score;
-}
-
-// Angle noise of the generated bend datasets (the generator's default: an angle read off a
-// side photo), in degrees.
-inline constexpr double kBendNoiseDeg = 1.0;
-
-// A bend dataset (the three variants over the edge by 60, 80 and 100 mm, 10 repetitions) with
-// `effect` hidden in it.
-inline GeneratedDataset generate_bend(const std::string& effect, std::uint64_t seed = 3) {
-  GeneratorOptions options;
-  options.experiment = ExperimentType::kBend;
-  options.seed = seed;
-  options.effect = effect;
   options.bend_angle_noise_deg = kBendNoiseDeg;
   options.common = base_model();
   return generate_dataset(options);
 }
 
-// The overall bend-angle score of the bend twin with the bond `effect` added.
-inline double bend_score(const Dataset& data, const HiddenEffect& effect) {
+// Compression: three loading rates.
+inline GeneratedDataset generate(const std::string& effect, std::uint64_t seed = 3) {
+  return generate_of(ExperimentType::kCompress, effect, seed);
+}
+// Slide: two variants, dry and wet, 10 repetitions.
+inline GeneratedDataset generate_slide(const std::string& effect, std::uint64_t seed = 3) {
+  return generate_of(ExperimentType::kSlide, effect, seed);
+}
+// Drop: 50, 100 and 200 mm, flat.
+inline GeneratedDataset generate_drop(const std::string& effect, std::uint64_t seed = 3) {
+  return generate_of(ExperimentType::kDrop, effect, seed);
+}
+// Bend: the three variants over the edge by 60, 80 and 100 mm, 10 repetitions.
+inline GeneratedDataset generate_bend(const std::string& effect, std::uint64_t seed = 3) {
+  return generate_of(ExperimentType::kBend, effect, seed);
+}
+
+// The overall score (RMS over noise) of `channel` for the twin `Model` on the base model's
+// spec changed by `with_effect`.
+template <typename Model, typename WithEffect>
+double twin_score(const Dataset& data, const HiddenEffect& effect, const WithEffect& with_effect,
+                  std::string_view channel) {
   model_tests::CommonParams common = base_model();
-  common.base_spec = with_bond_effect(common.base_spec, effect);
-  TwinBendModel model(common);
-  return compare(data, model).overall("bend_angle").score;
+  common.base_spec = with_effect(common.base_spec, effect);
+  Model model(common);
+  return compare(data, model).overall(channel).score;
+}
+
+// The overall scores of the twins with a bond or contact `effect` added ({}: the base model).
+inline double force_score(const Dataset& data, const HiddenEffect& effect) {
+  return twin_score<TwinCompressModel>(data, effect, with_bond_effect, "force");
+}
+inline double angle_score(const Dataset& data, const HiddenEffect& effect) {
+  return twin_score<TwinSlideModel>(data, effect, with_contact_effect, "onset_angle");
+}
+inline double height_score(const Dataset& data, const HiddenEffect& effect) {
+  return twin_score<TwinDropModel>(data, effect, with_bond_effect, "height");
+}
+inline double bend_score(const Dataset& data, const HiddenEffect& effect) {
+  return twin_score<TwinBendModel>(data, effect, with_bond_effect, "bend_angle");
 }
 
 // Issue 6's proof on a dataset made with a hidden effect: diagnose ranks that effect first and
