@@ -54,7 +54,6 @@ CompressResult run_compress(const CompressParams& params) {
   dem::Simulation sim(std::make_shared<dem::Model>(spec));
   add_fillet(sim, block, Eigen::Quaterniond::Identity(), 0.0, 0.0, 0.0);
   sim.prepare();
-  const dem::Model& model = sim.model();
   const std::uint32_t top_plane = 1;
   const double mid_z = 0.5 * height;
   // Layers by creation order: the block template is z-major.
@@ -87,31 +86,9 @@ CompressResult run_compress(const CompressParams& params) {
     }
     return force;
   };
-  // The engine reports no per-wall force: evaluate the top plate's contact laws again for
-  // each particle (normal part: elastic, adhesive and damping; fresh history).
-  auto plate_force = [&] {
-    const dem::State& s = sim.state();
-    const dem::WallState& wall = s.walls[top_plane];
-    const double plate_z = height + wall.translation_m.z();
-    double force = 0.0;
-    for (std::size_t k = 0; k < s.size(); ++k) {
-      dem::PairGeometry g;
-      g.normal = -Vec3::UnitZ();
-      g.overlap_m = s.radius_m[k] - (plate_z - s.position_m[k].z());
-      if (g.overlap_m <= 0.0) continue;
-      g.relative_velocity_m_per_s = s.velocity_m_per_s[k] - wall.linear_velocity_m_per_s;
-      g.effective_radius_m = s.radius_m[k];
-      g.effective_mass_kg = s.mass_kg(k);
-      g.timestep_s = spec.timestep_s;
-      dem::PairState history;
-      dem::ForceAccumulator acc;
-      for (const auto& law : model.interaction(s.type[k], equipment).contact_laws) {
-        law->compute(g, history, acc);
-      }
-      force += acc.normal_force_n + acc.normal_damping_force_n;
-    }
-    return force;
-  };
+  // The particles' force on the top plate from the engine's last force evaluation (every law
+  // of the chain), pushing it up: the force a load cell behind the plate reads.
+  auto plate_force = [&] { return sim.state().wall_force_n[top_plane].z(); };
 
   const double gap0 = layer_gap();
   dem::WallState& top = sim.wall("top");

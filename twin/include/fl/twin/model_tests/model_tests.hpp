@@ -153,7 +153,7 @@ struct CompressSample {
   double plate_travel_m = 0.0;
   double block_shortening_m = 0.0;  // top minus bottom sphere layer, change since start
   double section_force_n = 0.0;     // compressive force through the block's mid-height bonds
-  double plate_force_n = 0.0;       // normal contact force on the top plate
+  double plate_force_n = 0.0;       // the block's push on the top plate (State::wall_force_n)
 };
 
 struct CompressResult {
