@@ -95,6 +95,10 @@ ExperimentSchema make_schema(ExperimentType type) {
                         {"outflow", Quantity::kMassFlow, 0.0, 100.0, true}};
       schema.conditions.push_back(
           {"belt_speed", Kind::kNumber, Quantity::kSpeed, 0.0, 5.0, {}, false});
+      // Fillets in the hopper when the belt starts (the thesis filled it up: 450 in its bulk
+      // run; 600 is the twin scene's limit).
+      schema.conditions.push_back(
+          {"fill", Kind::kNumber, Quantity::kDimensionless, 1.0, 600.0, {}, false});
       break;
   }
   return schema;

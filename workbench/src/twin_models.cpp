@@ -324,6 +324,16 @@ Table TwinBulkFlowModel::run(const Dataset& dataset, const Trial& trial) {
   config.simulation.thread_count = common_.thread_count;
   const auto speed = trial.conditions.find("belt_speed");
   if (speed != trial.conditions.end()) config.belt.speed_mps = std::get<double>(speed->second);
+  const auto fill = trial.conditions.find("fill");
+  if (fill != trial.conditions.end()) {
+    const double fillets = std::get<double>(fill->second);
+    if (fillets != std::floor(fillets)) {
+      std::ostringstream reason;
+      reason << "the bulk-flow model fills the hopper with whole fillets, not " << fillets;
+      throw std::runtime_error(reason.str());
+    }
+    config.feeder.initial_fill = static_cast<std::uint32_t>(fillets);
+  }
   const std::vector<double>& opening_m = trial.data.at("opening").values_si;
   std::vector<double> openings_mm;
   for (const double opening : opening_m) {

@@ -61,6 +61,21 @@ TEST(BulkFlowTwin, TheBeltSpeedConditionReachesTheScene) {
             model.run(running, running.trials.front()).at("outflow").values_si.front());
 }
 
+TEST(BulkFlowTwin, TheFillConditionReachesTheScene) {
+  TwinBulkFlowModel model(base_model(), narrow_scene());
+  // Two fillets in the hopper: at most both (under 0.5 kg) can pass in 1.5 s, fewer than the
+  // narrow scene's 16 let through at the same opening.
+  Dataset sparse = bulk_dataset({0.100}, 0.2);
+  sparse.trials.front().conditions["fill"] = 2.0;
+  Dataset full = bulk_dataset({0.100}, 0.2);
+  const double sparse_kg_per_s =
+      model.run(sparse, sparse.trials.front()).at("outflow").values_si.front();
+  EXPECT_LT(sparse_kg_per_s, 0.5 / 1.5);
+  EXPECT_LT(sparse_kg_per_s, model.run(full, full.trials.front()).at("outflow").values_si.front());
+  sparse.trials.front().conditions["fill"] = 2.5;
+  EXPECT_THROW((void)model.run(sparse, sparse.trials.front()), std::runtime_error);
+}
+
 TEST(BulkFlowTwin, RefusesAnOpeningTheGateCannotReach) {
   TwinBulkFlowModel model(base_model(), narrow_scene());
   const Dataset data = bulk_dataset({0.5}, 0.2);  // the cylinder stops at 150 mm
