@@ -111,9 +111,11 @@ std::vector<std::string> names_of(const std::vector<EffectRange>& effects) {
   return names;
 }
 
+// The thesis' three fillet sizes (table 3.1), in the order the generated trials take them.
+constexpr const char* kVariants[] = {"144x72x40", "172x72x32", "176x72x40"};
+
 // Trial k of a slide dataset: the variants in turn, each dry then wet; `repetitions` rows.
 Trial slide_trial(int k, int repetitions) {
-  static constexpr const char* kVariants[] = {"144x72x40", "172x72x32", "176x72x40"};
   const std::string variant = kVariants[static_cast<std::size_t>(k / 2) % 3];
   const std::string surface = k % 2 == 0 ? "dry" : "wet";
   Trial trial;
@@ -152,7 +154,6 @@ Trial drop_trial(int k) {
 // (about 40, 45 and 55 % of their lengths: the thesis' half), 10 mm more each time round;
 // `repetitions` rows.
 Trial bend_trial(int k, int repetitions) {
-  static constexpr const char* kVariants[] = {"144x72x40", "172x72x32", "176x72x40"};
   const std::string variant = kVariants[static_cast<std::size_t>(k) % 3];
   const int overhang_mm = 60 + 20 * (k % 3) + 10 * (k / 3);
   Trial trial;

@@ -95,6 +95,25 @@ std::string bond_law_text(const dem::ModelSpec& spec) {
   return "none";
 }
 
+// Refuses a dataset of another experiment type, naming the model and both types.
+void require_experiment(const Dataset& dataset, ExperimentType type, std::string_view model) {
+  if (dataset.experiment != type) {
+    throw std::runtime_error("the " + std::string(model) + " model runs " +
+                             std::string(to_string(type)) + " datasets, not " +
+                             std::string(to_string(dataset.experiment)));
+  }
+}
+
+// The model's answer: one channel in the unit of the trial's channel of that name, the trial's
+// source lines kept for the report.
+Table single_channel_answer(const Trial& trial, std::string_view name,
+                            std::vector<double> values_si) {
+  Table table;
+  table.channels.push_back({std::string(name), trial.data.at(name).unit, std::move(values_si)});
+  table.lines = trial.data.lines;
+  return table;
+}
+
 }  // namespace
 
 TwinCompressModel::TwinCompressModel(model_tests::CommonParams common)
@@ -108,10 +127,7 @@ std::string TwinCompressModel::describe() const {
 }
 
 Table TwinCompressModel::run(const Dataset& dataset, const Trial& trial) {
-  if (dataset.experiment != ExperimentType::kCompress) {
-    throw std::runtime_error("the compress model runs compress datasets, not " +
-                             std::string(to_string(dataset.experiment)));
-  }
+  require_experiment(dataset, ExperimentType::kCompress, "compress");
   const std::vector<double>& time_s = trial.data.at("time").values_si;
   const std::vector<double>& displacement_m = trial.data.at("displacement").values_si;
   model_tests::CompressParams params;
@@ -127,12 +143,9 @@ Table TwinCompressModel::run(const Dataset& dataset, const Trial& trial) {
     throw std::runtime_error("the compress model returned " + std::to_string(result.series.size()) +
                              " samples for " + std::to_string(time_s.size()) + " rows");
   }
-  Table table;
-  Channel force{"force", trial.data.at("force").unit, {}};
-  for (const auto& sample : result.series) force.values_si.push_back(sample.plate_force_n);
-  table.channels.push_back(std::move(force));
-  table.lines = trial.data.lines;
-  return table;
+  std::vector<double> force_n;
+  for (const auto& sample : result.series) force_n.push_back(sample.plate_force_n);
+  return single_channel_answer(trial, "force", std::move(force_n));
 }
 
 TwinSlideModel::TwinSlideModel(model_tests::CommonParams common, SlideSettings settings)
@@ -149,11 +162,8 @@ std::string TwinSlideModel::describe() const {
 }
 
 Table TwinSlideModel::run(const Dataset& dataset, const Trial& trial) {
-  if (dataset.experiment != ExperimentType::kSlide) {
-    throw std::runtime_error("the slide model runs slide datasets, not " +
-                             std::string(to_string(dataset.experiment)));
-  }
-  const Channel& measured = trial.data.at("onset_angle");
+  require_experiment(dataset, ExperimentType::kSlide, "slide");
+  (void)trial.data.at("onset_angle");  // refuses a trial without the channel before running
   model_tests::SlideParams params;
   params.common = common_;
   params.common.variant = fillet_variant(trial.conditions, common_.variant);
@@ -199,12 +209,9 @@ Table TwinSlideModel::run(const Dataset& dataset, const Trial& trial) {
     throw std::runtime_error(reason.str());
   }
   constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-  Table table;
-  table.channels.push_back(
-      {"onset_angle", measured.unit,
-       std::vector<double>(trial.data.rows(), *result.slide_angle_deg * kRadPerDeg)});
-  table.lines = trial.data.lines;
-  return table;
+  return single_channel_answer(
+      trial, "onset_angle",
+      std::vector<double>(trial.data.rows(), *result.slide_angle_deg * kRadPerDeg));
 }
 
 TwinDropModel::TwinDropModel(model_tests::CommonParams common) : common_(std::move(common)) {
@@ -244,10 +251,7 @@ Table TwinDropModel::run(const Dataset& dataset, const Trial& trial) {
                              std::to_string(result.centre_height_m.size()) + " of " +
                              std::to_string(trial.data.rows()) + " rows");
   }
-  Table table;
-  table.channels.push_back({"height", trial.data.at("height").unit, result.centre_height_m});
-  table.lines = trial.data.lines;
-  return table;
+  return single_channel_answer(trial, "height", result.centre_height_m);
 }
 
 TwinBendModel::TwinBendModel(model_tests::CommonParams common, BendSettings settings)
@@ -263,10 +267,7 @@ std::string TwinBendModel::describe() const {
 }
 
 Table TwinBendModel::run(const Dataset& dataset, const Trial& trial) {
-  if (dataset.experiment != ExperimentType::kBend) {
-    throw std::runtime_error("the bend model runs bend datasets, not " +
-                             std::string(to_string(dataset.experiment)));
-  }
+  require_experiment(dataset, ExperimentType::kBend, "bend");
   const auto overhang = trial.conditions.find("overhang");
   if (overhang == trial.conditions.end()) {
     throw std::runtime_error("the bend model needs the trial's overhang condition");
@@ -291,11 +292,8 @@ Table TwinBendModel::run(const Dataset& dataset, const Trial& trial) {
     throw std::runtime_error("the bend model's fillet slid off the table");
   }
   constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-  Table table;
-  table.channels.push_back({"bend_angle", trial.data.at("bend_angle").unit,
-                            std::vector<double>(trial.data.rows(), result.angle_deg * kRadPerDeg)});
-  table.lines = trial.data.lines;
-  return table;
+  return single_channel_answer(
+      trial, "bend_angle", std::vector<double>(trial.data.rows(), result.angle_deg * kRadPerDeg));
 }
 
 TwinBulkFlowModel::TwinBulkFlowModel(model_tests::CommonParams common, BulkFlowSettings settings)
@@ -313,10 +311,7 @@ std::string TwinBulkFlowModel::describe() const {
 }
 
 Table TwinBulkFlowModel::run(const Dataset& dataset, const Trial& trial) {
-  if (dataset.experiment != ExperimentType::kBulkFlow) {
-    throw std::runtime_error("the bulk-flow model runs bulk_flow datasets, not " +
-                             std::string(to_string(dataset.experiment)));
-  }
+  require_experiment(dataset, ExperimentType::kBulkFlow, "bulk-flow");
   BulkDemConfig config = settings_.scene;
   config.engine = common_.base_spec;
   keep_wet_film_for_wet_trials(config.engine, trial.conditions);
@@ -348,14 +343,10 @@ Table TwinBulkFlowModel::run(const Dataset& dataset, const Trial& trial) {
   }
   const std::vector<GateSweepPoint> points = sweep_gate_opening(
       config, openings_mm, GateSweepOptions{settings_.settle_s, settings_.measure_s});
-  Table table;
-  Channel outflow{"outflow", trial.data.at("outflow").unit, {}};
-  for (const GateSweepPoint& point : points) {
-    outflow.values_si.push_back(point.gate_mass_flow_kg_per_s);
-  }
-  table.channels.push_back(std::move(outflow));
-  table.lines = trial.data.lines;
-  return table;
+  std::vector<double> outflow_kg_per_s;
+  for (const GateSweepPoint& point : points)
+    outflow_kg_per_s.push_back(point.gate_mass_flow_kg_per_s);
+  return single_channel_answer(trial, "outflow", std::move(outflow_kg_per_s));
 }
 
 TwinLineTracksModel::TwinLineTracksModel(model_tests::CommonParams common)
@@ -372,10 +363,7 @@ std::string TwinLineTracksModel::describe() const {
 }
 
 Table TwinLineTracksModel::run(const Dataset& dataset, const Trial& trial) {
-  if (dataset.experiment != ExperimentType::kLineTracks) {
-    throw std::runtime_error("the line-tracks model runs line_tracks datasets, not " +
-                             std::string(to_string(dataset.experiment)));
-  }
+  require_experiment(dataset, ExperimentType::kLineTracks, "line-tracks");
   model_tests::BeltTracksParams params;
   params.common = common_;
   params.common.variant = fillet_variant(trial.conditions, common_.variant);
