@@ -108,7 +108,8 @@ void Tracker::advance(const InputImage& in) {
   }
 }
 
-bool Tracker::confirm_unmatched(CameraId camera, float s_mm, std::int64_t time_ns) {
+bool Tracker::confirm_unmatched(CameraId camera, float s_mm, std::int64_t time_ns,
+                                std::uint32_t sequence) {
   auto& tentatives = tentatives_[index(camera)];
   // A tentative not seen for this many frame periods was a phantom.
   constexpr float kExpiryPeriods = 3.0F;
@@ -126,11 +127,15 @@ bool Tracker::confirm_unmatched(CameraId camera, float s_mm, std::int64_t time_n
   }
   if (match == nullptr) {
     if (free_slot == nullptr) return false;  // flooded with phantoms: counted, not adopted
-    *free_slot = Tentative{true, s_mm, 1, time_ns};
+    *free_slot = Tentative{true, s_mm, 1, time_ns, sequence};
     return kConfirmFrames <= 1;
   }
   match->s_mm = s_mm;
   match->last_seen_ns = time_ns;
+  // Several blobs of one frame at one place are one sighting: a flooding or glitching camera
+  // repeating a detection must not confirm it within a single frame.
+  if (match->last_sequence == sequence) return false;
+  match->last_sequence = sequence;
   if (++match->hits < kConfirmFrames) return false;
   match->active = false;
   return true;
@@ -262,7 +267,7 @@ FrameIntake Tracker::ingest(const InputImage& in, CameraId camera, EventRing& ev
       emit(events, in.time_ns, EventCode::kDetectionUnmatched, 0, source, estimate.x_mm);
       const bool must_adopt = camera == CameraId::kOrientation || camera == CameraId::kPosition ||
                               camera == CameraId::kFinal;
-      if (!must_adopt || !confirm_unmatched(camera, s_now, in.time_ns)) continue;
+      if (!must_adopt || !confirm_unmatched(camera, s_now, in.time_ns, frame.sequence)) continue;
       item = create(in.time_ns, s_now, true);
       if (item == nullptr) continue;
       ++adopted_;

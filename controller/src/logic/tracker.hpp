@@ -111,8 +111,9 @@ struct FrameIntake {
 struct Tentative {
   bool active = false;
   float s_mm = 0.0F;
-  std::uint8_t hits = 0;
-  std::int64_t last_seen_ns = 0;
+  std::uint8_t hits = 0;            // frames that saw it, at most one per frame
+  std::int64_t last_seen_ns = 0;    // scan time of the frame that last saw it
+  std::uint32_t last_sequence = 0;  // that frame's sequence number
 };
 
 class Tracker {
@@ -172,8 +173,9 @@ class Tracker {
 
  private:
   Item* nearest_item(float s_mm, float gate_mm);
-  // Counts an unmatched detection; returns true once it is confirmed.
-  bool confirm_unmatched(CameraId camera, float s_mm, std::int64_t time_ns);
+  // Counts an unmatched detection of frame `sequence`; returns true once it is confirmed by
+  // kConfirmFrames different frames.
+  bool confirm_unmatched(CameraId camera, float s_mm, std::int64_t time_ns, std::uint32_t sequence);
 
   const LineConfig& config_;
   std::array<Item, kMaxTrackedItems> items_{};

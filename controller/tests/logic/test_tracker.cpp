@@ -132,6 +132,25 @@ TEST_F(TrackerTest, RepeatedUnmatchedDetectionAtCameraOneIsAdoptedForRejection) 
   EXPECT_EQ(adopted.reject_reason, Outcome::kRejectedUntracked);
 }
 
+// A camera that repeats one detection across its frame (a flood, a glitch) has seen it once:
+// eight identical blobs in one frame, the most a frame holds, confirm nothing; adoption still
+// takes kConfirmFrames separate frames.
+TEST_F(TrackerTest, IdenticalDetectionsInOneFrameAreOneSighting) {
+  const float camera_s = h.config.cameras[index(CameraId::kOrientation)].s_mm;
+  CameraFrame& frame = h.in.cameras[index(CameraId::kOrientation)];
+  for (int sighting = 1; sighting <= Tracker::kConfirmFrames; ++sighting) {
+    EXPECT_EQ(h.tracker.active_count(), 0U) << "adopted after " << sighting - 1 << " frames";
+    h.in.time_ns += 40'000'000;  // the camera's 25 frames per second
+    test::publish(h.in, h.config, CameraId::kOrientation, camera_s,
+                  test::good_estimate(Hand::kLeft, SideUp::kBone, 0.0F));
+    frame.count = static_cast<std::uint8_t>(kMaxEstimatesPerFrame);
+    for (std::size_t e = 1; e < kMaxEstimatesPerFrame; ++e) frame.estimates[e] = frame.estimates[0];
+    h.tracker.ingest(h.in, CameraId::kOrientation, h.events);
+  }
+  ASSERT_EQ(h.tracker.active_count(), 1U);
+  EXPECT_TRUE(h.tracker.items()[0].adopted);
+}
+
 // Phantoms (glare, a scrap of skin) appear once at random places: never adopted.
 TEST_F(TrackerTest, PhantomDetectionsAreNotAdopted) {
   const float camera_s = h.config.cameras[index(CameraId::kOrientation)].s_mm;
