@@ -82,6 +82,9 @@ struct ModeHooks {
   std::function<void(nlohmann::json&)> report;  // its counters into the JSON
   std::function<void()> print;                  // and onto stdout
   std::function<bool()> peer_lost;              // the line faulted for a lost peer
+  // The devices brought up right before the first scan, once memory is locked (0, or the
+  // exit code to end with); empty when there is nothing to bring up.
+  std::function<int()> bring_up;
 };
 
 }  // namespace
@@ -143,6 +146,15 @@ int run_control(ControlParts& parts, dds::DdsProcessIo& io, const ModeHooks& hoo
     }
     hooks.drain();
   };
+
+  // Memory is locked before the devices come up, not after: locking takes long (0.7 s for
+  // this process in an emulated guest), and the drives a CANopen start-up enables expect
+  // SYNC and commands right after it. The twin's drives stopped on that gap as lost
+  // commands, as real drives with a command timeout would.
+  runtime.prepare();
+  if (hooks.bring_up) {
+    if (const int code = hooks.bring_up(); code != 0) return code;
+  }
 
   // The operator's start, as linectl run gives it, applied at the first scan.
   parts.logic.request_start();
@@ -304,6 +316,10 @@ int control_over_dds(ControlParts& parts, dds::Participant& participant) {
   return run_control(parts, io, hooks);
 }
 
+// Cycles exchanged after the CANopen start-up and before the first scan: every device
+// answers a SYNC within its cycle, and five leave room for one that is slow to.
+constexpr int kPrimingCycles = 5;
+
 // The line's drives and I/O on CANopen (config/can.yaml) over a SocketCAN interface.
 int control_over_can(ControlParts& parts) {
   drivers::CanConfig config =
@@ -318,31 +334,48 @@ int control_over_can(ControlParts& parts) {
     return 2;
   }
   drivers::CanopenIo master(*bus, config);
-
-  // Start-up (NMT reset, SDO configuration, NMT start, drives enabled) until every node
-  // answers: on power-up the drives may still be booting, and a twin may start later.
-  spdlog::info("control: CANopen start-up on {}, retried for up to {} s", config.interface_name,
-               parts.times.wait_s);
-  drivers::StartupReport startup;
-  const bool up = wait_until(
-      [&] {
-        startup = master.start_up(drivers::monotonic_bus_clock(), true);
-        master.log_events();
-        return startup.ok;
-      },
-      parts.times.wait_s, [] { return g_control_interrupts.load() > 0; },
-      std::chrono::milliseconds(200));
-  if (!up) {
-    spdlog::error("control: the CANopen start-up on {} did not complete within {} s:",
-                  config.interface_name, parts.times.wait_s);
-    for (const std::string& problem : startup.problems) spdlog::error("  {}", problem);
-    return 4;
-  }
-  spdlog::info("control: CANopen start-up in {:.0f} ms",
-               static_cast<double>(startup.duration_ns) / 1e6);
-
   dds::DdsProcessIo io(parts.cameras, master, parts.output);
   ModeHooks hooks;
+
+  // Start-up (NMT reset, SDO configuration, NMT start) until every node answers: on power-up
+  // the drives may still be booting, and a twin may start later. The drives are enabled by
+  // the scan (the line's start, CiA 402 one transition per cycle), not here: a drive enabled
+  // by the start-up would run its command timeout through the wait until the first scan's
+  // SYNC, which the twin's drives (100 ms) saw expire in an emulated guest.
+  drivers::StartupReport startup;
+  hooks.bring_up = [&] {
+    spdlog::info("control: CANopen start-up on {}, retried for up to {} s", config.interface_name,
+                 parts.times.wait_s);
+    const bool up = wait_until(
+        [&] {
+          startup = master.start_up(drivers::monotonic_bus_clock(), /*enable_drives=*/false);
+          master.log_events();
+          return startup.ok;
+        },
+        parts.times.wait_s, [] { return g_control_interrupts.load() > 0; },
+        std::chrono::milliseconds(200));
+    if (!up) {
+      spdlog::error("control: the CANopen start-up on {} did not complete within {} s:",
+                    config.interface_name, parts.times.wait_s);
+      for (const std::string& problem : startup.problems) spdlog::error("  {}", problem);
+      return 4;
+    }
+    spdlog::info("control: CANopen start-up in {:.0f} ms",
+                 static_cast<double>(startup.duration_ns) / 1e6);
+    // A few cycles with every drive disabled and every actuator released, so that the first
+    // scan reads the devices' TPDOs (the safety chain, the statuswords) and not an empty
+    // image, which would latch an E-stop. A disabled drive has no command to time out, so
+    // the wait for the first scan costs nothing.
+    const drivers::BusClock clock = drivers::monotonic_bus_clock();
+    const OutputImage idle{};
+    InputImage primed{};
+    for (int cycle = 0; cycle < kPrimingCycles; ++cycle) {
+      master.write(idle);
+      clock.wait_ns(config.cycle_period_ns);
+      master.read(clock.now_ns(), primed);
+    }
+    return 0;
+  };
   hooks.drain = [&] { master.log_events(); };
   hooks.report = [&](nlohmann::json& json) {
     const drivers::CanopenCounters& counts = master.counters();

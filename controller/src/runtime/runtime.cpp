@@ -122,10 +122,10 @@ void ScanRuntime::request_stop() noexcept {
   stop_requested_.store(true, std::memory_order_relaxed);
 }
 
-RealtimeSetup ScanRuntime::start() {
-  if (started_) throw std::logic_error("ScanRuntime::start: a runtime starts once");
-  started_ = true;
-  RealtimeSetup setup;
+RealtimeSetup ScanRuntime::prepare() {
+  if (prepared_) return prepared_setup_;
+  prepared_ = true;
+  RealtimeSetup& setup = prepared_setup_;
 
   if (options_.lock_memory) {
     if (mlockall(MCL_CURRENT | MCL_FUTURE) == 0) {
@@ -157,6 +157,13 @@ RealtimeSetup ScanRuntime::start() {
                        (error_number == EACCES || error_number == EPERM ? " (needs root)" : ""));
     }
   }
+  return setup;
+}
+
+RealtimeSetup ScanRuntime::start() {
+  if (started_) throw std::logic_error("ScanRuntime::start: a runtime starts once");
+  started_ = true;
+  RealtimeSetup setup = prepare();
 
   // The thread waits at the gate until its priority and affinity are set, so that no scan
   // runs with the wrong ones.

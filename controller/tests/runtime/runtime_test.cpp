@@ -11,9 +11,11 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <fstream>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
+#include <string>
 #include <string_view>
 #include <thread>
 
@@ -506,6 +508,40 @@ TEST(ScanRuntime, AppliesFifoPriorityMemoryLockAndAffinityWhenPermitted) {
   EXPECT_EQ(logic.priority, 10);
   EXPECT_EQ(logic.cpu, 0);
   EXPECT_EQ(runtime.scans(), 5U);
+}
+
+// The kernel's count of this process's locked memory (VmLck in /proc/self/status), in kB.
+long locked_kib() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmLck:", 0) == 0) return std::stol(line.substr(6));
+  }
+  return -1;
+}
+
+// A caller that brings devices up between prepare() and start() (linectl control's CANopen
+// start-up) finds memory already locked when it starts, and start() keeps that result
+// instead of locking again.
+TEST(ScanRuntime, PrepareLocksMemoryBeforeTheScanStarts) {
+  CopyingIo io;
+  EchoLogic logic;
+  ScanRuntime runtime(io, logic,
+                      RuntimeOptions{.period_ns = 2 * kMs, .lock_memory = true, .max_scans = 3});
+  const RealtimeSetup prepared = runtime.prepare();
+  const long locked_before_start_kib = locked_kib();
+  if (!prepared.memory_locked) {
+    munlockall();
+    GTEST_SKIP() << "mlockall refused here: " << prepared.error;
+  }
+  EXPECT_GT(locked_before_start_kib, 0) << "prepare() reported a lock the kernel does not show";
+  EXPECT_EQ(runtime.scans(), 0U) << "prepare() must not start scanning";
+  EXPECT_TRUE(runtime.prepare().memory_locked);  // a second call returns the first result
+  const RealtimeSetup setup = runtime.run();
+  munlockall();  // leave the rest of the test binary as it was
+  EXPECT_TRUE(setup.started);
+  EXPECT_TRUE(setup.memory_locked);
+  EXPECT_EQ(runtime.scans(), 3U);
 }
 
 TEST(ScanRuntime, RejectsInvalidOptions) {

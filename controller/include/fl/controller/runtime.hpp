@@ -174,9 +174,15 @@ class ScanRuntime {
   ScanRuntime(const ScanRuntime&) = delete;
   ScanRuntime& operator=(const ScanRuntime&) = delete;
 
-  // Applies the real-time setup, starts the scan and watchdog threads and returns. The first
-  // scan is scheduled one period after the call. A runtime starts once (std::logic_error on
-  // a second call).
+  // The process-wide part of the real-time setup, once: locks memory and holds the CPU
+  // latency request. Locking a large process can take long (0.7 s for 400 MB in an emulated
+  // guest), so a caller that brings devices up before the first scan (a CANopen start-up
+  // that enables drives, whose command timeout then runs) prepares first. Later calls return
+  // the first call's result.
+  RealtimeSetup prepare();
+  // Prepares (if not done), starts the scan and watchdog threads and returns the whole setup.
+  // The first scan is scheduled one period after the call. A runtime starts once
+  // (std::logic_error on a second call).
   RealtimeSetup start();
   // Async-signal-safe. The scan thread finishes its current scan and does not start another
   // (a request that arrives while it sleeps takes effect when it wakes, within a period).
@@ -227,6 +233,8 @@ class ScanRuntime {
   std::int64_t first_wakeup_ns_ = 0;
   int dma_latency_fd_ = -1;  // the request lasts as long as the file stays open
 
+  bool prepared_ = false;
+  RealtimeSetup prepared_setup_;
   bool started_ = false;
   std::latch start_gate_{1};
   std::thread scan_thread_;
