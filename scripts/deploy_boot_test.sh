@@ -12,12 +12,15 @@
 #      locked memory and cpu_dma_latency 0 us; the main process as fillet-line with exactly
 #      CAP_SYS_NICE + CAP_IPC_LOCK), lets it run 20 s, stops it (SIGTERM drains the line;
 #      ledger and KPIs written, clean exit), restarts it with a broken line.yaml (refused in
-#      ExecStartPre with file and line in the journal), writes its results as a tar archive
-#      onto a second virtio disk and powers off,
+#      ExecStartPre with file and line in the journal); then starts fillet-line-control.service
+#      on vcan0 (made by systemd-networkd at boot) against the twin's emulated CANopen devices
+#      (linectl twin serve --can vcan0): the same start-up and privilege checks, its CANopen
+#      start-up, 20 s of the line without a fault, a clean stop, the twin's books balanced;
+#      writes its results as a tar archive onto a second virtio disk and powers off,
 #   6. the host reads that disk, prints every check, checks the KPIs and the ledger.
 # Exit 0 only if every check passed. Needs root (chroot, mounts), debootstrap, qemu-system-x86
 # and e2fsprogs. Kept under build/deploy-test/boot/: the console log (console.log), the
-# results (results/: results.txt, journal excerpts, ledger.csv, kpis.json), the apt log.
+# results (results/: results.txt, journal excerpts, both units' ledgers and KPIs, the twin's log), the apt log.
 #   scripts/deploy_boot_test.sh [BUILD_DIR]     (default build/release)
 #   FL_BOOT_TIMEOUT_S=900   cap for the qemu run (boot, checks, power-off)
 #   FL_BOOT_KEEP_IMAGE=1    keep the root image (boot/root.ext4, about 2 GB) after the run
@@ -103,6 +106,29 @@ TimeoutStartSec=20min
 WantedBy=multi-user.target
 EOF
 in_root systemctl enable fillet-line.service fillet-boot-check.service
+# The CAN interface of fillet-line-control.service, set up as docs/deployment.md tells a site
+# to set up can0: the CAN modules loaded at boot, the link made and brought up by
+# systemd-networkd. vcan0 stands in for the CAN adapter; the twin's emulated CANopen devices
+# (linectl twin serve --can vcan0, started by the check) are on the other end.
+mkdir -p "$root/etc/systemd/network" "$root/etc/modules-load.d"
+printf 'can\ncan_raw\nvcan\n' >"$root/etc/modules-load.d/can.conf"
+cat >"$root/etc/systemd/network/80-vcan0.netdev" <<'EOF'
+[NetDev]
+Name=vcan0
+Kind=vcan
+EOF
+cat >"$root/etc/systemd/network/80-vcan0.network" <<'EOF'
+[Match]
+Name=vcan0
+
+[Link]
+RequiredForOnline=no
+EOF
+in_root systemctl enable systemd-networkd.service >/dev/null 2>&1 ||
+  fail "systemctl enable systemd-networkd in the root"
+# The guest has no network card (qemu -nodefaults), so no link could ever come online: the wait
+# would hold network-online.target, which the control unit is ordered after, for 2 minutes.
+in_root systemctl mask systemd-networkd-wait-online.service >/dev/null 2>&1 || true
 # Nothing else on the timers while the test runs.
 in_root systemctl mask apt-daily.timer apt-daily-upgrade.timer e2scrub_all.timer fstrim.timer \
   >/dev/null 2>&1 || true
@@ -147,7 +173,7 @@ rm -f "$boot/results.img"
 say "results (guest: $results/results.txt; journal: $results/journal-fillet-line.txt)"
 sed 's/^/  /' "$results/results.txt"
 host_status=0
-python3 - "$results/kpis.json" "$results/ledger.csv" <<'EOF' || host_status=1
+python3 - "$results/fillet-line-kpis.json" "$results/fillet-line-ledger.csv" <<'EOF' || host_status=1
 import json, sys
 try:
     kpis = json.load(open(sys.argv[1]))

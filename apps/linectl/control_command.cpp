@@ -178,6 +178,13 @@ int run_control(ControlParts& parts, dds::DdsProcessIo& io, const ModeHooks& hoo
     elapsed_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     if (!stop_sent && (elapsed_s >= times.duration_s || g_control_interrupts.load() > 0)) {
+      // The journal says why the line stopped: a service stop or ^C, or the set duration.
+      if (g_control_interrupts.load() > 0) {
+        spdlog::info("control: stop requested by signal: stopping the line, draining belts");
+      } else {
+        spdlog::info("control: {} s of feeding done: stopping the line, draining belts",
+                     times.duration_s);
+      }
       parts.logic.request_stop();
       stop_sent = true;
       fed_s = std::min(times.duration_s, elapsed_s);
