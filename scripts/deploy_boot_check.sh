@@ -134,6 +134,25 @@ check_main_process() {
     test "$node" = "root:fillet-line 660" -a "$dma_fd" -ge 1
 }
 
+# After `systemctl stop "$unit"` (its exit status $1; stop_begin and stop_since taken before it):
+# a clean stop that drained the line after SIGTERM. $2 prefixes the check names; the stop's
+# journal is left in stop_journal.
+check_stopped() {
+  local stop_rc=$1 label=$2 stop_s result main_code main_status undrained
+  stop_s=$((SECONDS - stop_begin))
+  result=$(prop Result)
+  main_code=$(prop ExecMainCode)
+  main_status=$(prop ExecMainStatus)
+  expect "${label}systemctl stop" "exit $stop_rc after $stop_s s (TimeoutStopSec 90 s)" test "$stop_rc" = 0
+  expect "${label}clean stop" "Result=$result, main process exit code $main_code (1: exited) status $main_status" \
+    test "$result" = success -a "$main_code" = 1 -a "$main_status" = 0
+  stop_journal=$(unit_journal --since "@$stop_since")
+  expect "${label}SIGTERM stops the line and drains" "journal: $(grep -m1 -o 'stop requested by signal.*' <<<"$stop_journal" || echo 'no stop line')" \
+    grep -q 'stop requested by signal' <<<"$stop_journal"
+  undrained=$(grep -m1 -E 'before the belts were drained|timed out|Killing' <<<"$stop_journal" || true)
+  expect "${label}drained, not killed" "${undrained:-no drain timeout, no kill}" test -z "$undrained"
+}
+
 # 1. The service comes up at boot under systemd, with its real-time setup and privileges.
 check_started ""
 check_main_process ""
@@ -151,19 +170,7 @@ stop_since=$(date +%s)
 sleep 1
 stop_begin=$SECONDS
 systemctl stop "$unit"
-stop_rc=$?
-stop_s=$((SECONDS - stop_begin))
-result=$(prop Result)
-main_code=$(prop ExecMainCode)
-main_status=$(prop ExecMainStatus)
-expect "systemctl stop" "exit $stop_rc after $stop_s s (TimeoutStopSec 90 s)" test "$stop_rc" = 0
-expect "clean stop" "Result=$result, main process exit code $main_code (1: exited) status $main_status" \
-  test "$result" = success -a "$main_code" = 1 -a "$main_status" = 0
-stop_journal=$(unit_journal --since "@$stop_since")
-expect "SIGTERM stops the line and drains" "journal: $(grep -m1 -o 'stop requested by signal.*' <<<"$stop_journal" || echo 'no stop line')" \
-  grep -q 'stop requested by signal' <<<"$stop_journal"
-undrained=$(grep -m1 -E 'before the belts were drained|timed out|Killing' <<<"$stop_journal" || true)
-expect "drained, not killed" "${undrained:-no drain timeout, no kill}" test -z "$undrained"
+check_stopped $? ""
 ledger_rows=$( (wc -l <"$state_dir/ledger.csv") 2>/dev/null || echo 0)
 ledger_owner=$(stat -c %U "$state_dir/ledger.csv" 2>/dev/null || echo missing)
 expect "ledger written" "$state_dir/ledger.csv: $ledger_rows lines ($rows_running while running), owner $ledger_owner" \
@@ -257,21 +264,11 @@ stop_since=$(date +%s)
 sleep 1
 stop_begin=$SECONDS
 systemctl stop "$unit"
-stop_rc=$?
+check_stopped $? "control: "
 control_journal=$(unit_journal --since "@$control_since" --until "@$stop_since")
 fault=$(grep -m1 -E 'runtime fault|fault raised|the line faulted' <<<"$control_journal" || true)
 expect "control: no fault while running" "${fault:-none in $control_run_s s; $running_state}" \
   test -z "$fault" -a "$running_state" = active
-stop_s=$((SECONDS - stop_begin))
-result=$(prop Result)
-main_code=$(prop ExecMainCode)
-main_status=$(prop ExecMainStatus)
-expect "control: systemctl stop" "exit $stop_rc after $stop_s s (TimeoutStopSec 90 s)" test "$stop_rc" = 0
-expect "control: clean stop" "Result=$result, main process exit code $main_code (1: exited) status $main_status" \
-  test "$result" = success -a "$main_code" = 1 -a "$main_status" = 0
-stop_journal=$(unit_journal --since "@$stop_since")
-expect "control: SIGTERM stops the line and drains" "journal: $(grep -m1 -o 'stop requested by signal.*' <<<"$stop_journal" || echo 'no stop line')" \
-  grep -q 'stop requested by signal' <<<"$stop_journal"
 balanced=$(grep -c '"balanced": true' "$state_dir/kpis.json" 2>/dev/null || echo 0)
 kpis_mtime=$(stat -c %Y "$state_dir/kpis.json" 2>/dev/null || echo 0)
 expect "control: KPIs written at the stop, ledger balanced" "$state_dir/kpis.json: written $((kpis_mtime - stop_since)) s after the stop request, $balanced balanced book" \
