@@ -323,10 +323,6 @@ int control_over_dds(ControlParts& parts, dds::Participant& participant) {
   return run_control(parts, io, hooks);
 }
 
-// Cycles exchanged after the CANopen start-up and before the first scan: every device
-// answers a SYNC within its cycle, and five leave room for one that is slow to.
-constexpr int kPrimingCycles = 5;
-
 // The line's drives and I/O on CANopen (config/can.yaml) over a SocketCAN interface.
 int control_over_can(ControlParts& parts) {
   drivers::CanConfig config =
@@ -369,18 +365,6 @@ int control_over_can(ControlParts& parts) {
     }
     spdlog::info("control: CANopen start-up in {:.0f} ms",
                  static_cast<double>(startup.duration_ns) / 1e6);
-    // A few cycles with every drive disabled and every actuator released, so that the first
-    // scan reads the devices' TPDOs (the safety chain, the statuswords) and not an empty
-    // image, which would latch an E-stop. A disabled drive has no command to time out, so
-    // the wait for the first scan costs nothing.
-    const drivers::BusClock clock = drivers::monotonic_bus_clock();
-    const OutputImage idle{};
-    InputImage primed{};
-    for (int cycle = 0; cycle < kPrimingCycles; ++cycle) {
-      master.write(idle);
-      clock.wait_ns(config.cycle_period_ns);
-      master.read(clock.now_ns(), primed);
-    }
     return 0;
   };
   hooks.drain = [&] { master.log_events(); };

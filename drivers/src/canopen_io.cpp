@@ -594,6 +594,14 @@ bool CanopenIo::configure_io(SdoClient& sdo, std::size_t m, std::vector<std::str
                    canopen::layout::kIoTpdo1, problems);
 }
 
+std::string CanopenIo::node_label(std::size_t slot) const {
+  const std::string device =
+      slot < kDriveCount
+          ? "drive " + std::string(config_name(static_cast<DriveId>(slot)))
+          : "I/O module " + std::string(config_name(static_cast<IoModuleId>(slot - kDriveCount)));
+  return "node " + std::to_string(nodes_[slot].id) + " (" + device + ")";
+}
+
 StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
   StartupReport report;
   const std::int64_t started_ns = clock.now_ns();
@@ -627,13 +635,8 @@ StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
     if (clock.now_ns() >= boot_deadline_ns) {
       for (std::size_t slot = 0; slot < kNodeCount; ++slot) {
         if (!nodes_[slot].rebooted) {
-          report.problems.push_back(
-              "node " + std::to_string(nodes_[slot].id) + " (" +
-              (slot < kDriveCount
-                   ? "drive " + std::string(config_name(static_cast<DriveId>(slot)))
-                   : "I/O module " +
-                         std::string(config_name(static_cast<IoModuleId>(slot - kDriveCount)))) +
-              "): no boot-up message within " + std::to_string(config_.boot_timeout_ms) + " ms");
+          report.problems.push_back(node_label(slot) + ": no boot-up message within " +
+                                    std::to_string(config_.boot_timeout_ms) + " ms");
         }
       }
       break;
@@ -671,32 +674,44 @@ StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
     node.nmt = NmtState::kOperational;
   }
 
-  // 4. CiA 402 enable, one transition per cycle as the statuswords confirm.
-  if (configured && enable_drives) {
+  // 4. Cycles with the idle image until every node's TPDOs have arrived once, so that the first
+  //    scan reads the devices (the safety chain, the statuswords) and not an empty image, which
+  //    would latch an E-stop. With enable_drives the same cycles take every drive through
+  //    CiA 402 to Operation Enabled, one transition per cycle as the statuswords confirm.
+  if (configured) {
     OutputImage out{};
-    out.state = LineState::kStarting;
-    for (DriveCommand& command : out.drives) {
-      command.enable = true;
+    if (enable_drives) {
+      out.state = LineState::kStarting;
+      for (DriveCommand& command : out.drives) {
+        command.enable = true;
+      }
     }
     InputImage in{};
-    const std::int64_t enable_deadline_ns =
+    const auto node_answered = [this](std::size_t slot) {
+      return slot < kDriveCount ? drives_[slot].status_received && drives_[slot].position_received
+                                : io_[slot - kDriveCount].received;
+    };
+    const auto drive_done = [&](std::size_t d) { return !enable_drives || in.drives[d].ready; };
+    const std::int64_t deadline_ns =
         clock.now_ns() + std::int64_t{config_.enable_timeout_ms} * 1'000'000;
-    bool all_enabled = false;
-    while (!all_enabled && clock.now_ns() < enable_deadline_ns) {
+    bool done = false;
+    while (!done && clock.now_ns() < deadline_ns) {
       write(out);
       clock.wait_ns(config_.cycle_period_ns);
       read(clock.now_ns(), in);
-      all_enabled = std::all_of(in.drives.begin(), in.drives.end(),
-                                [](const DriveFeedback& feedback) { return feedback.ready; });
+      done = true;
+      for (std::size_t slot = 0; slot < kNodeCount; ++slot) {
+        done = done && node_answered(slot) && (slot >= kDriveCount || drive_done(slot));
+      }
     }
-    if (!all_enabled) {
-      for (std::size_t d = 0; d < kDriveCount; ++d) {
-        if (!in.drives[d].ready) {
-          report.problems.push_back("drive " + std::string(config_name(static_cast<DriveId>(d))) +
-                                    " (node " + std::to_string(nodes_[d].id) +
-                                    "): not in operation enabled within " +
-                                    std::to_string(config_.enable_timeout_ms) + " ms, state " +
-                                    cia402::to_string(drives_[d].state));
+    if (!done) {
+      const std::string within = " within " + std::to_string(config_.enable_timeout_ms) + " ms";
+      for (std::size_t slot = 0; slot < kNodeCount; ++slot) {
+        if (!node_answered(slot)) {
+          report.problems.push_back(node_label(slot) + ": no process data" + within);
+        } else if (slot < kDriveCount && !drive_done(slot)) {
+          report.problems.push_back(node_label(slot) + ": not in operation enabled" + within +
+                                    ", state " + cia402::to_string(drives_[slot].state));
         }
       }
       configured = false;

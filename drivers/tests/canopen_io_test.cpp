@@ -44,6 +44,21 @@ TEST(CanopenIo, StartUpConfiguresEveryNodeAndReachesOperationEnabled) {
   EXPECT_LT(report.duration_ns, 1'000'000'000);
 }
 
+TEST(CanopenIo, StartUpWithoutEnablePrimesTheImageWithEveryDevice) {
+  // The controller's own start-up (linectl control --can) leaves the drives disabled, and the
+  // first scan must still read the devices: an empty image reads an open safety chain.
+  LoopbackRig rig;
+  const StartupReport report = rig.start(false);
+  ASSERT_TRUE(report.ok) << (report.problems.empty() ? "" : report.problems.front());
+  rig.io.read(rig.now_ns, rig.in);
+  EXPECT_TRUE(rig.in.estop_ok);  // the safety module's chain input, closed by the rig
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    EXPECT_NE(rig.drives[d]->state().state, cia402::State::kOperationEnabled);
+    EXPECT_FALSE(rig.in.drives[d].ready);
+    EXPECT_FALSE(rig.in.drives[d].fault) << "drive slot " << d;
+  }
+}
+
 TEST(CanopenIo, StartUpNamesANodeThatNeverBoots) {
   LoopbackRig rig;
   rig.drive(DriveId::kGuide).set_silent(true);

@@ -5,8 +5,9 @@
 //
 // Start-up (outside the cycle, start_up()): NMT reset of every node, wait for each boot-up
 // message, SDO configuration (heartbeat producer time, PDO COB-IDs, mappings and
-// transmission types, CiA 402 profile velocity mode and ramps), NMT start, and optionally
-// the CiA 402 enable sequence up to Operation Enabled.
+// transmission types, CiA 402 profile velocity mode and ramps), NMT start, then cycles until
+// every node's process data has arrived (optionally with the CiA 402 enable sequence up to
+// Operation Enabled).
 //
 // Safe reactions (each also reported as an event):
 // - drive heartbeat lost (no heartbeat within its timeout), CiA 402 fault, an EMCY with a
@@ -89,8 +90,9 @@ class CanopenIo final : public ProcessIo {
  public:
   CanopenIo(CanBus& bus, CanConfig config);
 
-  // Outside the cycle. Runs the whole start-up; enable_drives also takes every drive to
-  // Operation Enabled at zero speed.
+  // Outside the cycle. Runs the whole start-up and ends after a cycle in which every node's
+  // TPDOs had arrived, so that the next read() fills the whole image; enable_drives also takes
+  // every drive to Operation Enabled at zero speed.
   StartupReport start_up(const BusClock& clock, bool enable_drives);
 
   void read(std::int64_t now_ns, InputImage& in) override;
@@ -162,6 +164,8 @@ class CanopenIo final : public ProcessIo {
   void build_routes();
   void handle_frame(const CanFrame& frame, std::int64_t now_ns);
   void check_timeouts(std::int64_t now_ns);
+  // "node 5 (drive takt)": how start-up problems name a node.
+  std::string node_label(std::size_t slot) const;
   void fill_image(InputImage& in) const;
   void push_event(CanopenEventKind kind, canopen::NodeId node, std::int64_t time_ns,
                   std::uint32_t code, std::uint8_t detail = 0);
