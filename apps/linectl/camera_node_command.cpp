@@ -85,16 +85,11 @@ std::optional<OpenedSource> open_source(const CameraServeArgs& args, CameraId ca
       opened.recorded_calibration = source->calibration();
       opened.period_ns = source->median_period_ns() > 0 ? source->median_period_ns() : period_ns;
       opened.source = std::move(source);
-    } else if (!args.images_dir.empty()) {
-      opened.period_ns = period_ns;
-      opened.source = std::make_unique<rec::DirectoryFrameSource>(args.images_dir, period_ns);
-    } else if (!args.video_file.empty()) {
-      auto source = std::make_unique<rec::VideoCaptureFrameSource>(args.video_file, period_ns);
-      opened.period_ns = source->period_ns();
-      opened.source = std::move(source);
     } else {
-      opened.source = std::make_unique<rec::VideoCaptureFrameSource>(args.device);
-      opened.live = true;
+      opened.source = open_camera_frames(args.images_dir, args.video_file, args.device, period_ns);
+      // A video file paces at its own frame rate; a device's frames are stamped as they come.
+      opened.period_ns = opened.source->period_ns();
+      opened.live = args.device >= 0;
     }
   } catch (const std::exception& error) {
     spdlog::error("camera serve: {}", error.what());

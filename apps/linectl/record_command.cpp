@@ -281,14 +281,8 @@ int record_camera(const RecordArgs& args, double duration_s) {
   }
   const vision::BeltCalibration calibration = vision::load_calibration(args.calibration);
   const auto period_ns = std::llround(kNsPerS / args.fps);
-  std::unique_ptr<rec::FrameSource> source;
-  if (!args.images_dir.empty()) {
-    source = std::make_unique<rec::DirectoryFrameSource>(args.images_dir, period_ns);
-  } else if (!args.video_file.empty()) {
-    source = std::make_unique<rec::VideoCaptureFrameSource>(args.video_file, period_ns);
-  } else {
-    source = std::make_unique<rec::VideoCaptureFrameSource>(args.device);
-  }
+  const std::unique_ptr<rec::FrameSource> source =
+      open_camera_frames(args.images_dir, args.video_file, args.device, period_ns);
   rec::WriterSettings settings;
   settings.png_compression = args.png_compression;
   settings.info = {{"source", source->describe()}, {"camera", args.camera}};

@@ -30,4 +30,16 @@ std::optional<vision::EstimatorParams> estimator_options(const std::vector<std::
   return params;
 }
 
+std::unique_ptr<vision::record::FrameSource> open_camera_frames(const std::string& images_dir,
+                                                                const std::string& video_file,
+                                                                int device,
+                                                                std::int64_t period_ns) {
+  if (!images_dir.empty())
+    return std::make_unique<vision::record::DirectoryFrameSource>(images_dir, period_ns);
+  if (!video_file.empty()) {
+    return std::make_unique<vision::record::VideoCaptureFrameSource>(video_file, period_ns);
+  }
+  return std::make_unique<vision::record::VideoCaptureFrameSource>(device);
+}
+
 }  // namespace fl::apps

@@ -38,6 +38,9 @@ class FrameSource {
   // file or device when a frame cannot be read (a corrupt image is an error, not an end).
   virtual std::optional<SourceFrame> next() = 0;
   [[nodiscard]] virtual std::string describe() const = 0;
+  // The spacing of the frames' stamps where the source sets it (a directory's, a video file's
+  // frame rate); 0 where frames are stamped as they arrive or the spacing is not known.
+  [[nodiscard]] virtual std::int64_t period_ns() const { return 0; }
 };
 
 // Every image file (png, jpg, jpeg, bmp, tif, tiff, pgm, ppm) in a directory, in file-name order,
@@ -49,6 +52,7 @@ class DirectoryFrameSource final : public FrameSource {
   std::optional<SourceFrame> next() override;
   [[nodiscard]] std::string describe() const override;
   [[nodiscard]] std::size_t size() const { return files_.size(); }
+  [[nodiscard]] std::int64_t period_ns() const override { return period_ns_; }
 
  private:
   std::filesystem::path directory_;
@@ -69,7 +73,7 @@ class VideoCaptureFrameSource final : public FrameSource {
   std::optional<SourceFrame> next() override;
   [[nodiscard]] std::string describe() const override { return description_; }
   // A file's frame spacing (its frame rate, or the fallback); 0 for a device.
-  [[nodiscard]] std::int64_t period_ns() const { return period_ns_; }
+  [[nodiscard]] std::int64_t period_ns() const override { return period_ns_; }
 
  private:
   struct Capture;
