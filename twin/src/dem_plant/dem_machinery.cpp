@@ -83,9 +83,30 @@ void DemPlant::command_walls(double h_s) {
     s.walls[wall_belt_[d]].surface_velocity_m_per_s =
         Vec3(drives_.speed_mps(static_cast<DriveId>(d)), 0.0, 0.0);
   }
+  // The plates' surfaces convey at the guide's speed down their slopes, as the guide's own
+  // belt; plate 1 swings about its hinge (the belt's right edge, along the slope) to open.
   const double guide_mps = drives_.speed_mps(DriveId::kGuide);
-  s.walls[wall_plate1_].surface_velocity_m_per_s = Vec3(guide_mps, 0.0, 0.0);
-  s.walls[wall_plate2_].surface_velocity_m_per_s = Vec3(guide_mps, 0.0, 0.0);
+  const PlateLayout plates = plate_layout();
+  const Vec3 down_plate1 =
+      Vec3(plates.end_m - plates.start_m, 0.0, plates.end_z_m - plates.top_z_m).normalized();
+  dem::WallState& plate1 = s.walls[wall_plate1_];
+  const double swing_rad = stations_.plate1_travel *
+                           static_cast<double>(config_.machinery.plate_swing_deg) *
+                           std::numbers::pi / 180.0;
+  if (swing_rad != stations_.plate1_angle_rad) {
+    // Start the step from the pose the last one aimed at (no drift of the integrated
+    // rotation), then turn at the rate that reaches this step's angle at its end.
+    plate1.rotation =
+        Eigen::Quaterniond(Eigen::AngleAxisd(stations_.plate1_angle_rad, down_plate1));
+    plate1.angular_velocity_rad_per_s =
+        down_plate1 * (swing_rad - stations_.plate1_angle_rad) / h_s;
+    stations_.plate1_angle_rad = swing_rad;
+  } else {
+    plate1.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(swing_rad, down_plate1));
+    plate1.angular_velocity_rad_per_s.setZero();
+  }
+  plate1.surface_velocity_m_per_s = plate1.rotation * down_plate1 * guide_mps;
+  s.walls[wall_landing_].surface_velocity_m_per_s = Vec3(guide_mps, 0.0, 0.0);
   // The pusher's face runs with the centring belt (a belt-faced pusher): it shifts the fillet
   // sideways only. A still steel face (mu 0.5) braked the side it touched, turned the fillet
   // by 0.77 rad during one stroke and threw its centroid 30 mm past the centre line.
@@ -129,13 +150,13 @@ DriveId DemPlant::drive_under(double s_m) const {
   return DriveId::kGuide;  // the plates convey at the guide's speed
 }
 
-void DemPlant::flip(Fillet& fillet, int plate) {
-  // Simplification (see the header): a retracted plate turns the fillet over in one go, a
-  // rigid rotation by pi about its centroid: plate 1 about the lateral axis (end over end, the
-  // heading a becomes pi - a), plate 2 about the travel axis (sideways, a becomes -a). Its
-  // lowest point stays where it was; the spheres keep the fillet's mean velocity, spins stop.
+void DemPlant::flip_sideways(Fillet& fillet) {
+  // Simplification (see the header): plate 2 turns the fillet over in one go, a rigid
+  // rotation by pi through its centroid about the travel direction down the plate's slope (the
+  // heading a becomes -a, as a twisting conveyor turns it). Its lowest point stays where it
+  // was; the spheres keep the fillet's mean velocity, spins stop.
   dem::State& s = sim_->mutable_state();
-  const Vec3 axis = plate == 1 ? Vec3::UnitY() : Vec3::UnitX();
+  const Vec3 axis = Vec3(1.0, 0.0, deck_slope(fillet.centroid_m.x())).normalized();
   const Eigen::Matrix3d turn = Eigen::AngleAxisd(std::numbers::pi, axis).toRotationMatrix();
   double low_before = 1e9;
   double low_after = 1e9;
@@ -149,7 +170,6 @@ void DemPlant::flip(Fillet& fillet, int plate) {
     s.velocity_m_per_s[k] = fillet.velocity_m_per_s;
     s.angular_velocity_rad_per_s[k].setZero();
   }
-  ++counters_.flips;
 }
 
 void DemPlant::apply_events(const OutputImage& out) {
@@ -165,6 +185,7 @@ void DemPlant::apply_events(const OutputImage& out) {
   const double placed_m = line_.placed_at_s_mm * kMm;
   const DemLossConfig& losses = config_.losses;
   const double half_w = config_.machinery.belt_half_width_mm * kMm;
+  const PlateLayout plates = plate_layout();
   bool moved = false;
   for (Fillet& f : fillets_) {
     if (f.particles.empty()) continue;
@@ -173,10 +194,23 @@ void DemPlant::apply_events(const OutputImage& out) {
       f.fed = true;
       ++counters_.fillets_fed;
     }
-    for (int plate = 1; plate <= 2; ++plate) {
-      const double plate_m = plate == 1 ? plate1_m : plate2_m;
-      if (!(f.previous_s_m < plate_m && s_m >= plate_m)) continue;
-      const double travel = plate == 1 ? stations_.plate1_travel : stations_.plate2_travel;
+    // Plate 1 is physical: whether the fillet turns over is the contact's business. A fillet
+    // that reaches it while it swings is counted, as the fast plant counts a misflip.
+    if (f.previous_s_m < plate1_m && s_m >= plate1_m && stations_.plate1_travel > 0.0 &&
+        stations_.plate1_travel < 1.0) {
+      ++counters_.misflips;
+    }
+    // Turned over on the plates or not: the fitted side as it left the guide and as it
+    // reaches the reject belt.
+    if (f.previous_s_m < plates.start_m && s_m >= plates.start_m) {
+      f.side_before_plates = fit_pose(f).side;
+    }
+    if (f.previous_s_m < plates.end_m && s_m >= plates.end_m &&
+        f.side_before_plates != SideUp::kUnknown && fit_pose(f).side != f.side_before_plates) {
+      ++counters_.flips;
+    }
+    if (f.previous_s_m < plate2_m && s_m >= plate2_m) {
+      const double travel = stations_.plate2_travel;
       bool do_flip = travel >= 1.0;
       if (travel > 0.0 && travel < 1.0) {
         // Plate in mid-travel: flips or not by chance and throws the heading (fast plant).
@@ -193,7 +227,7 @@ void DemPlant::apply_events(const OutputImage& out) {
         moved = true;
       }
       if (do_flip) {
-        flip(f, plate);
+        flip_sideways(f);
         moved = true;
       }
     }

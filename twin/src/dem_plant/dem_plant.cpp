@@ -30,11 +30,17 @@ void add_quad(dem::MeshWallSpec& mesh, const Vec3& a, const Vec3& b, const Vec3&
   mesh.triangles.push_back({{a, c, d}});
 }
 
+// A belt or plate from (x0, z0) to (x1, z1) along the line, across y0..y1.
+dem::MeshWallSpec slope_rect(std::string name, std::uint32_t type, double x0, double z0, double x1,
+                             double z1, double y0, double y1) {
+  dem::MeshWallSpec mesh{std::move(name), type, {}};
+  add_quad(mesh, Vec3(x0, y0, z0), Vec3(x1, y0, z1), Vec3(x1, y1, z1), Vec3(x0, y1, z0));
+  return mesh;
+}
+
 dem::MeshWallSpec belt_rect(std::string name, std::uint32_t type, double x0, double x1, double y0,
                             double y1) {
-  dem::MeshWallSpec mesh{std::move(name), type, {}};
-  add_quad(mesh, Vec3(x0, y0, 0.0), Vec3(x1, y0, 0.0), Vec3(x1, y1, 0.0), Vec3(x0, y1, 0.0));
-  return mesh;
+  return slope_rect(std::move(name), type, x0, 0.0, x1, 0.0, y0, y1);
 }
 
 // A vertical wall along the segment (x0, y0) -> (x1, y1) from z0 to z1.
@@ -44,6 +50,34 @@ void add_fence(dem::MeshWallSpec& mesh, double x0, double y0, double x1, double 
 }
 
 }  // namespace
+
+DemPlant::PlateLayout DemPlant::plate_layout() const {
+  const DemMachineryConfig& m = config_.machinery;
+  PlateLayout p;
+  p.start_m = line_.sections[index(DriveId::kGuide)].end_mm * kMm;
+  p.end_m = line_.sections[index(DriveId::kReject)].start_mm * kMm;
+  p.top_z_m = m.plate1_drop_mm * kMm;
+  p.end_z_m = m.plate1_end_height_mm * kMm;
+  p.upstream_z_m = p.top_z_m - m.guide_rise_mm * kMm;
+  return p;
+}
+
+double DemPlant::deck_z_m(double s_m) const {
+  const PlateLayout p = plate_layout();
+  const double guide_start_m = line_.sections[index(DriveId::kGuide)].start_mm * kMm;
+  const auto ramp = [](double s, double s0, double z0, double s1, double z1) {
+    return z0 + (z1 - z0) * std::clamp((s - s0) / (s1 - s0), 0.0, 1.0);
+  };
+  if (s_m <= guide_start_m) return p.upstream_z_m;
+  if (s_m <= p.start_m) return ramp(s_m, guide_start_m, p.upstream_z_m, p.start_m, p.top_z_m);
+  if (s_m <= p.end_m) return ramp(s_m, p.start_m, p.top_z_m, p.end_m, p.end_z_m);
+  return 0.0;
+}
+
+double DemPlant::deck_slope(double s_m) const {
+  constexpr double kHalfBaseM = 0.001;  // central difference: a kink reads as the mean slope
+  return (deck_z_m(s_m + kHalfBaseM) - deck_z_m(s_m - kHalfBaseM)) / (2.0 * kHalfBaseM);
+}
 
 std::shared_ptr<const dem::Model> DemPlant::build_model() const {
   dem::ModelSpec spec = config_.engine;
@@ -73,7 +107,7 @@ std::shared_ptr<const dem::Model> DemPlant::build_model() const {
   const double start_m = -static_cast<double>(line_.takt_belt_length_mm) * kMm;
   const double end_m = line_.placed_at_s_mm * kMm;
   spec.domain.lower_m = Vec3(start_m - 0.2, -half_w - 0.3, -0.2);
-  spec.domain.upper_m = Vec3(end_m + 0.3, half_w + 0.3, 0.4);
+  spec.domain.upper_m = Vec3(end_m + 0.3, half_w + 0.3, 0.4 + plate_layout().top_z_m);
 
   auto self = const_cast<DemPlant*>(this);  // wall indices are recorded with the model
   self->wall_belt_.assign(kDriveCount, static_cast<std::size_t>(-1));
@@ -97,24 +131,27 @@ std::shared_ptr<const dem::Model> DemPlant::build_model() const {
       continue;
     }
     self->wall_belt_[d] = spec.meshes.size();
+    // Each belt at its level; the guide rises from the upstream level to its raised end.
+    const double z0 = deck_z_m(x0);
+    const double z1 = deck_z_m(x1);
     spec.meshes.push_back(
-        belt_rect("belt_" + std::to_string(d), equipment, x0, x1, -half_w, half_w));
+        slope_rect("belt_" + std::to_string(d), equipment, x0, z0, x1, z1, -half_w, half_w));
   }
-  // Flip plates: conveying surfaces between guide and reject belt (see the header).
-  const double plates_start = line_.sections[index(DriveId::kGuide)].end_mm * kMm;
-  const double plates_end = line_.sections[index(DriveId::kReject)].start_mm * kMm;
-  const double plates_mid = 0.5 * (plates_start + plates_end);
+  // Flip plates (see the header): plate 1 a slide over the whole section from the guide's
+  // raised end down to the reject belt, hinged along the belt's right edge to swing up out of
+  // the way; under it the landing, at the reject belt's level, catches a fillet that falls.
+  const PlateLayout plates = plate_layout();
   self->wall_plate1_ = spec.meshes.size();
-  spec.meshes.push_back(
-      belt_rect("flip_plate1", equipment, plates_start + gap, plates_mid - gap, -half_w, half_w));
-  self->wall_plate2_ = spec.meshes.size();
-  spec.meshes.push_back(
-      belt_rect("flip_plate2", equipment, plates_mid + gap, plates_end - gap, -half_w, half_w));
+  spec.meshes.push_back(slope_rect("flip_plate1", equipment, plates.start_m + gap, plates.top_z_m,
+                                   plates.end_m - gap, plates.end_z_m, -half_w, half_w));
+  self->wall_landing_ = spec.meshes.size();
+  spec.meshes.push_back(belt_rect("flip_plates_landing", equipment, plates.start_m + gap,
+                                  plates.end_m - gap, -half_w, half_w));
 
   // Side walls along the whole line and an end wall behind the takt belt.
   {
     dem::MeshWallSpec walls{"side_walls", equipment, {}};
-    const double h = m.side_wall_height_mm * kMm;
+    const double h = m.side_wall_height_mm * kMm + plates.top_z_m;
     add_fence(walls, start_m, half_w, end_m + 0.1, half_w, 0.0, h);
     add_fence(walls, start_m, -half_w, end_m + 0.1, -half_w, 0.0, h);
     add_fence(walls, start_m, -half_w, start_m, half_w, 0.0, h);
@@ -127,7 +164,7 @@ std::shared_ptr<const dem::Model> DemPlant::build_model() const {
     const double g1 = line_.sections[index(DriveId::kGuide)].end_mm * kMm;
     const double funnel_end = std::min(g1, g0 + m.rail_funnel_length_mm * kMm);
     const double channel = m.rail_channel_half_width_mm * kMm;
-    const double h = m.rail_height_mm * kMm;
+    const double h = m.rail_height_mm * kMm + plates.top_z_m;
     for (const double sign : {1.0, -1.0}) {
       add_fence(rails, g0, sign * half_w, funnel_end, sign * channel, 0.0, h);
       add_fence(rails, funnel_end, sign * channel, g1, sign * channel, 0.0, h);
@@ -198,6 +235,10 @@ void DemPlant::reset(std::uint64_t seed, InputImage& in) {
   state.walls[wall_pusher_].translation_m = Vec3(0.0, m.belt_half_width_mm * kMm + 0.15, 0.0);
   state.walls[wall_roller_].pivot_m =
       Vec3(line_.squeeze.roller_s_mm * kMm, 0.0, (m.roller_up_gap_mm + m.roller_radius_mm) * kMm);
+  const PlateLayout plates = plate_layout();
+  const double gap_m = 0.5 * m.belt_gap_mm * kMm;
+  state.walls[wall_plate1_].pivot_m =
+      Vec3(plates.start_m + gap_m, -m.belt_half_width_mm * kMm, plates.top_z_m);
   sim_->prepare();
 
   counters_ = DemPlantCounters{};
@@ -350,7 +391,7 @@ bool DemPlant::touching(std::size_t f) const {
 bool DemPlant::beam_broken() const {
   // The beam runs across the belt at s = 0 and beam height: any sphere crossing it.
   const dem::State& s = sim_->state();
-  const double beam_z = config_.machinery.beam_height_mm * kMm;
+  const double beam_z = deck_z_m(0.0) + config_.machinery.beam_height_mm * kMm;
   for (std::size_t k = 0; k < s.size(); ++k) {
     const double dx = s.position_m[k].x();
     const double dz = s.position_m[k].z() - beam_z;
@@ -367,11 +408,15 @@ std::uint32_t DemPlant::add_fillet(std::uint8_t variant, SideUp side,
   dem::BodyPose pose;
   pose.position_m = centroid_m;
   // Bone side up: the template turned over about its length axis (heading unchanged).
-  pose.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(angle_rad, Vec3::UnitZ()));
+  // Lying on the deck: pitched to its slope (the guide rises, the plates fall).
+  const double slope = deck_slope(centroid_m.x());
+  const double pitch_rad = -std::atan(slope);
+  pose.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(pitch_rad, Vec3::UnitY()) *
+                                        Eigen::AngleAxisd(angle_rad, Vec3::UnitZ()));
   if (side == SideUp::kBone) {
     pose.orientation = pose.orientation * Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitX());
   }
-  pose.velocity_m_per_s = Vec3(v_mps, 0.0, 0.0);
+  pose.velocity_m_per_s = v_mps * Vec3(1.0, 0.0, slope).normalized();
   const std::size_t first = sim_->state().size();
   const std::uint32_t body =
       sim_->add_body(t.positions_m, t.radii_m, t.types, template_bonds_[variant], pose);
@@ -405,7 +450,10 @@ std::optional<std::uint32_t> DemPlant::spawn_fillet(const DemFilletSpawn& spawn)
   const dem::FilletTemplate& t = templates_[variant];
   const double lift_m = config_.feeder.spawn_lift_mm * kMm;
   const std::uint32_t group = ++last_group_id_;
-  const Vec3 centre(spawn.s_mm * kMm, spawn.y_mm * kMm, t.half_extent_m.z() + lift_m);
+  const double s_m = spawn.s_mm * kMm;
+  const double slope = deck_slope(s_m);
+  const Vec3 centre(s_m, spawn.y_mm * kMm,
+                    deck_z_m(s_m) + t.half_extent_m.z() * std::sqrt(1.0 + slope * slope) + lift_m);
   add_fillet(variant, spawn.side, centre, spawn.angle_rad, spawn.v_mps, group);
   if (spawn.touching_pair) {
     // Side by side to the fillet's left, at the offset where the closest two spheres touch

@@ -59,7 +59,18 @@ DemPlantConfig load_dem_plant_config(const std::filesystem::path& file) {
       m.roller_down_gap_mm = map.read_float("roller_down_gap_mm", Range::non_negative());
       m.roller_segments = map.read_int<int>("roller_segments", Range::closed(6, 256));
       m.beam_height_mm = map.read_float("beam_height_mm", Range::positive());
+      m.guide_rise_mm = map.read_float("guide_rise_mm", Range::closed(0.0, 500.0));
+      m.plate1_drop_mm = map.read_float("plate1_drop_mm", Range::closed(20.0, 500.0));
+      m.plate1_end_height_mm = map.read_float("plate1_end_height_mm", Range::non_negative());
+      m.plate_swing_deg = map.read_float("plate_swing_deg", Range::closed(30.0, 150.0));
       map.finish();
+      reader.require(m.guide_rise_mm <= m.plate1_drop_mm,
+                     {"machinery.guide_rise_mm", "machinery.plate1_drop_mm"},
+                     "the guide cannot start below the reject belt: its rise is at most plate "
+                     "1's drop");
+      reader.require(m.plate1_end_height_mm < m.plate1_drop_mm,
+                     {"machinery.plate1_end_height_mm", "machinery.plate1_drop_mm"},
+                     "plate 1 must slide down: its end lower than the guide's raised end");
       reader.require(m.rail_channel_half_width_mm < m.belt_half_width_mm,
                      {"machinery.rail_channel_half_width_mm", "machinery.belt_half_width_mm"},
                      "the rail channel must be narrower than the belt");

@@ -3,18 +3,29 @@
 //
 // Fillets are bonded sphere meta-particles (fl/twin/dem/fillet_generator.hpp, six thesis
 // variants); the machinery is walls of the DEM engine, built from LineConfig. Engine frame
-// (metres): x = the line's s, y lateral (left > 0), z up, belts at z = 0.
+// (metres): x = the line's s, y lateral (left > 0), z up. The reject belt and everything
+// downstream lie at z = 0; the guide belt rises to its end (thesis 5.3: "this segment also
+// exhibits an upward motion"), 150 mm over the reject belt, and the belts upstream of it lie
+// at its start's level (DemMachineryConfig: guide_rise_mm, plate1_drop_mm).
 //
 // - Belts: one rectangle (two triangles) per product-path belt with the drive's actual speed
 //   as surface velocity; multilane units two side-by-side belts (left y > 0, right y < 0);
 //   small gaps between belts (see DemMachineryConfig). The drives are the shared
 //   DriveEmulator (fl/twin/sensors): 5 ms command delay, ramps, encoders, as the fast plant.
 // - Side walls along the whole line, guide rails funnelling over the guide belt.
-// - Flip plates: conveying surfaces at the guide belt's speed. Simplification: a retracted
-//   plate flips a fillet as an instantaneous rigid rotation of its spheres by 180 degrees
-//   about its centroid (plate 1 about the lateral axis, plate 2 about the travel axis) when
-//   the centroid crosses the plate; a plate in mid-travel flips by chance and throws the
-//   heading, as in the fast plant.
+// - Flip plate 1 (thesis 5.2, figure 5.13: a slide, or out of the way to leave a drop): a
+//   plate from the guide's raised end down over the plates section to 50 mm above the reject
+//   belt, conveying at the guide's speed, hinged along the belt's right edge. The command
+//   swings it up by 90 degrees in the actuation time; the fillet then falls over the guide's
+//   end onto the landing under it (at the reject belt's level) and turns over end over end by
+//   contact and gravity alone. A plate caught mid-swing does whatever its pose does to the
+//   fillet (counted as a misflip). Its lower edge stands over the thickest fillet so that the
+//   reject reversal carries a fillet back under it into the crate.
+// - Flip plate 2 (simplification): a fillet whose centroid crosses plate 2's position while
+//   the plate is retracted turns sideways in one go, a rigid rotation of its spheres by 180
+//   degrees about the travel direction through its centroid; a plate in mid-travel flips by
+//   chance and throws the heading, as in the fast plant. A physical sideways flip needs a
+//   lateral drop, which the 200 mm plates section has no room for beside plate 1.
 // - Reject belt: reverses on command; the crate is a removal zone under its upstream edge.
 // - Centring pusher: a vertical plate; a stroke starts at the edge of the fillet at the unit
 //   (the real unit's light grid) and travels the commanded shift, pushing by contact, on a
@@ -139,6 +150,7 @@ class DemPlant final : public Plant {
     bool squeezed_ok = false;
     bool thick_passed_roller = false;
     bool remove = false;
+    SideUp side_before_plates = SideUp::kUnknown;  // fitted as it left the guide
     double previous_s_m = 0.0;
     double progress_s_m = 0.0;
     std::int64_t progress_ns = 0;
@@ -151,6 +163,7 @@ class DemPlant final : public Plant {
   struct Stations {
     double plate1_travel = 0.0;
     double plate2_travel = 0.0;
+    double plate1_angle_rad = 0.0;  // plate 1's swing about its hinge (0: slide pose)
     double pusher_mm = 0.0;
     double pusher_speed_mmps = 0.0;
     int pusher_side = 0;  // +1 pushes from the left (towards -y), -1 from the right, 0 parked
@@ -188,12 +201,24 @@ class DemPlant final : public Plant {
   std::uint32_t add_fillet(std::uint8_t variant, SideUp side, const Eigen::Vector3d& centroid_m,
                            double angle_rad, double v_mps, std::uint32_t group_id);
   std::shared_ptr<const dem::Model> build_model() const;
+  // The flip plates' section and the levels of the product path (engine metres).
+  struct PlateLayout {
+    double start_m = 0.0;       // the guide's raised end, top_z_m high: plate 1's top edge
+    double end_m = 0.0;         // the reject belt's start, at z = 0
+    double top_z_m = 0.0;       // plate 1's drop
+    double end_z_m = 0.0;       // plate 1's lower edge, over the reject belt
+    double upstream_z_m = 0.0;  // takt and transition belts, the guide's start
+  };
+  [[nodiscard]] PlateLayout plate_layout() const;
+  // Height of the product path's surface at s (plates in their slide pose).
+  [[nodiscard]] double deck_z_m(double s_m) const;
+  [[nodiscard]] double deck_slope(double s_m) const;  // dz/ds there
 
   // dem_machinery.cpp
   void step_stations(double h_s, const OutputImage& out);
   void command_walls(double h_s);
   void apply_events(const OutputImage& out);
-  void flip(Fillet& fillet, int plate);
+  void flip_sideways(Fillet& fillet);
   [[nodiscard]] DriveId drive_under(double s_m) const;
 
   // dem_feeder.cpp
@@ -207,7 +232,7 @@ class DemPlant final : public Plant {
   std::shared_ptr<const dem::Model> model_;
   std::unique_ptr<dem::Simulation> sim_;
   std::vector<std::size_t> wall_belt_;  // per drive: engine wall index of its belt, or npos
-  std::size_t wall_plate1_ = 0, wall_plate2_ = 0, wall_pusher_ = 0, wall_roller_ = 0,
+  std::size_t wall_plate1_ = 0, wall_landing_ = 0, wall_pusher_ = 0, wall_roller_ = 0,
               wall_right_ml1_ = 0, wall_right_ml2_ = 0;
 
   DemPlantFaults faults_{};

@@ -60,6 +60,22 @@ struct DemMachineryConfig {
   int roller_segments = 24;
   // Height of the takt laser beam over the belt.
   float beam_height_mm = 10.0F;
+  // Levels of the product path (thesis 5.3): the guide belt rises by guide_rise_mm to its end;
+  // flip plate 1 is a slide over the whole plates section, down plate1_drop_mm to the reject
+  // belt's level (z = 0, everything downstream too). Swung out of the way it leaves the drop
+  // open: the fillet falls over the guide's end onto the landing under it and turns over.
+  // 150 mm turned every thesis variant end over end at the guide's 0.5 m/s on the 7 mm twin;
+  // 100 mm turned only the thin one. The rise is gentle (2.9 degrees over the 1 m guide): at
+  // 150 mm (8.5 degrees) fillets bunched at the incline's foot, and camera 1 saw five times
+  // as many touching or unclassifiable fillets in the closed loop.
+  float guide_rise_mm = 50.0F;
+  float plate1_drop_mm = 150.0F;
+  // The slide ends this high over the reject belt, higher than the thickest fillet (40 mm):
+  // a fillet the reversing belt carries back passes under it into the crate. Ending on the
+  // belt, the slide and the landing made a wedge that crushed such a fillet.
+  float plate1_end_height_mm = 50.0F;
+  // Plate 1 swings up about its hinge along the belt's right edge by this angle to open.
+  float plate_swing_deg = 90.0F;
   bool operator==(const DemMachineryConfig&) const = default;
 };
 
