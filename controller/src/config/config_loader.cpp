@@ -179,6 +179,7 @@ void read_stations(YamlMapReader& root, LineConfig& config) {
     YamlMapReader tracking = root.map("tracking");
     TrackingConfig& c = config.tracking;
     c.match_gate_mm = tracking.read_float("match_gate_mm", Range::positive());
+    c.plates_gate_mm = tracking.read_float("plates_gate_mm", Range::positive());
     c.nominal_length_mm = tracking.read_float("nominal_length_mm", Range::positive());
   }
   {
@@ -316,6 +317,9 @@ void check_cameras(const LineConfig& config, YamlReader& reader) {
 }
 
 void check_stations(const LineConfig& config, YamlReader& reader) {
+  reader.require(config.tracking.plates_gate_mm >= config.tracking.match_gate_mm,
+                 {"tracking.plates_gate_mm", "tracking.match_gate_mm"},
+                 "the gate after the flip plates must be at least the belts' gate");
   // Flip plates: slides in the gap between guide and reject belt, plate 1 first.
   const std::string guide_end = section_key(DriveId::kGuide, "end_mm");
   const std::string reject_start = section_key(DriveId::kReject, "start_mm");

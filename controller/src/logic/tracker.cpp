@@ -252,7 +252,9 @@ FrameIntake Tracker::ingest(const InputImage& in, CameraId camera, EventRing& ev
     float s_now = mount.s_mm + estimate.x_mm;
     s_now += 1000.0F * speed_at_mps(in, s_now) * age_s;
 
-    Item* item = nearest_item(s_now, config_.tracking.match_gate_mm);
+    Item* item =
+        nearest_item(s_now, camera == CameraId::kPosition ? config_.tracking.plates_gate_mm
+                                                          : config_.tracking.match_gate_mm);
     if (item != nullptr && std::find(matched_ids.begin(), matched_ids.begin() + matched_count,
                                      item->id) != matched_ids.begin() + matched_count) {
       ++duplicates_;

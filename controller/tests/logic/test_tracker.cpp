@@ -68,6 +68,29 @@ TEST_F(TrackerTest, DetectionCorrectsThePositionAndAddsEvidence) {
   EXPECT_FALSE(h.tracker.ingest(h.in, CameraId::kOrientation, h.events).new_frame);
 }
 
+// Over the flip plates an item does not move with the guide belt's encoder: on the DEM twin a
+// fillet reached camera 2 up to 90 mm ahead. Camera 2 matches within tracking.plates_gate_mm
+// (170), the other cameras within match_gate_mm (80): a detection 100 mm off is the item at
+// camera 2 and nothing at camera 1.
+TEST_F(TrackerTest, CameraAfterThePlatesMatchesWithinItsWiderGate) {
+  constexpr float kOffMm = 100.0F;  // between the two gates
+  ASSERT_GT(kOffMm, h.config.tracking.match_gate_mm);
+  ASSERT_LT(kOffMm, h.config.tracking.plates_gate_mm);
+  const float camera2_s = h.config.cameras[index(CameraId::kPosition)].s_mm;
+  Item* after_plates = h.tracker.create(0, camera2_s, false);
+  test::publish(h.in, h.config, CameraId::kPosition, camera2_s + kOffMm,
+                test::good_estimate(Hand::kLeft, SideUp::kBone, 0.1F));
+  EXPECT_EQ(h.tracker.ingest(h.in, CameraId::kPosition, h.events).unmatched, 0);
+  EXPECT_FLOAT_EQ(after_plates->s_mm, camera2_s + kOffMm);
+
+  const float camera1_s = h.config.cameras[index(CameraId::kOrientation)].s_mm;
+  Item* on_guide = h.tracker.create(0, camera1_s, false);
+  test::publish(h.in, h.config, CameraId::kOrientation, camera1_s + kOffMm,
+                test::good_estimate(Hand::kLeft, SideUp::kBone, 0.1F));
+  EXPECT_EQ(h.tracker.ingest(h.in, CameraId::kOrientation, h.events).unmatched, 1);
+  EXPECT_FLOAT_EQ(on_guide->s_mm, camera1_s);
+}
+
 TEST_F(TrackerTest, NotFiniteEstimateIsRefusedAndReported) {
   const float camera_s = h.config.cameras[index(CameraId::kPosition)].s_mm;
   Item* item = h.tracker.create(0, camera_s, false);

@@ -113,7 +113,10 @@ struct ToleranceConfig {
 };
 
 struct TrackingConfig {
-  float match_gate_mm = 80.0F;       // a detection matches a fillet predicted within this
+  float match_gate_mm = 80.0F;  // a detection matches a fillet predicted within this
+  // The same for camera 2, the first after the flip plates: an item's time over the plates
+  // is not the guide belt's (a slide gains on it, a fall loses), so its gate is wider.
+  float plates_gate_mm = 170.0F;
   float nominal_length_mm = 170.0F;  // used before camera 1 measures an item
 };
 
