@@ -671,12 +671,16 @@ StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
     node.rebooted = false;
     node.last_heartbeat_ns = now;  // the consumer timeouts start now
     // The heartbeat will confirm; until then the master takes its own command as the state.
+    // A heartbeat sent before the node took the NMT start still says pre-operational, so
+    // step 4 waits for one heard after it.
     node.nmt = NmtState::kOperational;
+    node.heard = false;
   }
 
-  // 4. Cycles with the idle image until every node's TPDOs have arrived once, so that the first
-  //    scan reads the devices (the safety chain, the statuswords) and not an empty image, which
-  //    would latch an E-stop. With enable_drives the same cycles take every drive through
+  // 4. Cycles with the idle image until every node's TPDOs have arrived once and its heartbeat
+  //    has reported Operational, so that the first scan reads the devices (the safety chain,
+  //    the statuswords) and not an empty image or a stale pre-operational state, either of
+  //    which would latch a fault. With enable_drives the same cycles take every drive through
   //    CiA 402 to Operation Enabled, one transition per cycle as the statuswords confirm.
   if (configured) {
     OutputImage out{};
@@ -691,6 +695,9 @@ StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
       return slot < kDriveCount ? drives_[slot].status_received && drives_[slot].position_received
                                 : io_[slot - kDriveCount].received;
     };
+    const auto node_operational = [this](std::size_t slot) {
+      return nodes_[slot].heard && nodes_[slot].nmt == NmtState::kOperational;
+    };
     const auto drive_done = [&](std::size_t d) { return !enable_drives || in.drives[d].ready; };
     const std::int64_t deadline_ns =
         clock.now_ns() + std::int64_t{config_.enable_timeout_ms} * 1'000'000;
@@ -701,7 +708,8 @@ StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
       read(clock.now_ns(), in);
       done = true;
       for (std::size_t slot = 0; slot < kNodeCount; ++slot) {
-        done = done && node_answered(slot) && (slot >= kDriveCount || drive_done(slot));
+        done = done && node_answered(slot) && node_operational(slot) &&
+               (slot >= kDriveCount || drive_done(slot));
       }
     }
     if (!done) {
@@ -709,6 +717,9 @@ StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
       for (std::size_t slot = 0; slot < kNodeCount; ++slot) {
         if (!node_answered(slot)) {
           report.problems.push_back(node_label(slot) + ": no process data" + within);
+        } else if (!node_operational(slot)) {
+          report.problems.push_back(node_label(slot) + ": no heartbeat reporting operational" +
+                                    within + ", state " + std::string(to_string(nodes_[slot].nmt)));
         } else if (slot < kDriveCount && !drive_done(slot)) {
           report.problems.push_back(node_label(slot) + ": not in operation enabled" + within +
                                     ", state " + cia402::to_string(drives_[slot].state));

@@ -6,8 +6,8 @@
 // Start-up (outside the cycle, start_up()): NMT reset of every node, wait for each boot-up
 // message, SDO configuration (heartbeat producer time, PDO COB-IDs, mappings and
 // transmission types, CiA 402 profile velocity mode and ramps), NMT start, then cycles until
-// every node's process data has arrived (optionally with the CiA 402 enable sequence up to
-// Operation Enabled).
+// every node's process data has arrived and its heartbeat reports Operational (optionally
+// with the CiA 402 enable sequence up to Operation Enabled).
 //
 // Safe reactions (each also reported as an event):
 // - drive heartbeat lost (no heartbeat within its timeout), CiA 402 fault, an EMCY with a
