@@ -179,7 +179,9 @@ void read_stations(YamlMapReader& root, LineConfig& config) {
     YamlMapReader tracking = root.map("tracking");
     TrackingConfig& c = config.tracking;
     c.match_gate_mm = tracking.read_float("match_gate_mm", Range::positive());
-    c.plates_gate_mm = tracking.read_float("plates_gate_mm", Range::positive());
+    // Optional, unlike the other keys: recordings carry the line.yaml they were made with, and
+    // before this key camera 2 matched within match_gate_mm, so that is what its absence means.
+    c.plates_gate_mm = tracking.read_float_or("plates_gate_mm", c.match_gate_mm, Range::positive());
     c.nominal_length_mm = tracking.read_float("nominal_length_mm", Range::positive());
   }
   {

@@ -380,6 +380,23 @@ TEST(LineConfigErrors, FinalCameraMustSeeBeforeTheAirKnife) {
   EXPECT_EQ(error.problems().size(), 1U);
 }
 
+// A recording carries the line.yaml it was made with; one made before tracking.plates_gate_mm
+// existed still loads, with camera 2 matching within match_gate_mm as it did then.
+TEST(LineConfigFile, PlatesGateMissingMeansTheBeltsGate) {
+  std::string text = reference_text();
+  const std::string key = "  plates_gate_mm: 170.0\n";
+  ASSERT_NE(text.find(key), std::string::npos);
+  text.erase(text.find(key), key.size());
+  const LineConfig loaded = parse_line_config(text, "line.yaml");
+  EXPECT_FLOAT_EQ(loaded.tracking.plates_gate_mm, loaded.tracking.match_gate_mm);
+}
+
+TEST(LineConfigErrors, PlatesGateNarrowerThanTheBeltsGate) {
+  const std::string text =
+      replaced(reference_text(), "  plates_gate_mm: 170.0", "  plates_gate_mm: 60.0");
+  EXPECT_THAT(parse_error(text).what(), HasSubstr("tracking.plates_gate_mm"));
+}
+
 TEST(LineConfigErrors, FlipPlatesOutOfOrder) {
   // Plate 1 at 2160 is downstream of plate 2 at 2150, though still in the 2000..2200 gap.
   const std::string text =
