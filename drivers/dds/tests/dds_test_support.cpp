@@ -59,10 +59,14 @@ bool wait_until(const std::function<bool()>& done, std::chrono::milliseconds tim
   return true;
 }
 
-PeerProcess::PeerProcess(const std::vector<std::string>& args, const std::string& cyclonedds_uri) {
+PeerProcess::PeerProcess(const std::vector<std::string>& args, const std::string& cyclonedds_uri)
+    : PeerProcess(FL_DDS_PEER, args, cyclonedds_uri) {}
+
+PeerProcess::PeerProcess(const std::string& executable, const std::vector<std::string>& args,
+                         const std::string& cyclonedds_uri) {
   int pipe_fds[2] = {-1, -1};
   if (pipe(pipe_fds) != 0) std::abort();
-  std::vector<std::string> argv_strings{FL_DDS_PEER};
+  std::vector<std::string> argv_strings{executable};
   argv_strings.insert(argv_strings.end(), args.begin(), args.end());
   std::vector<char*> argv;
   for (auto& s : argv_strings) argv.push_back(s.data());

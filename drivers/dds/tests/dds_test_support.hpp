@@ -30,6 +30,9 @@ bool wait_until(const std::function<bool()>& done, std::chrono::milliseconds tim
 class PeerProcess {
  public:
   PeerProcess(const std::vector<std::string>& args, const std::string& cyclonedds_uri);
+  // The same with another executable (the IDL-only peer of the interop tests).
+  PeerProcess(const std::string& executable, const std::vector<std::string>& args,
+              const std::string& cyclonedds_uri);
   ~PeerProcess();
   PeerProcess(const PeerProcess&) = delete;
   PeerProcess& operator=(const PeerProcess&) = delete;
