@@ -85,6 +85,8 @@ struct ModeHooks {
   // The devices brought up right before the first scan, once memory is locked (0, or the
   // exit code to end with); empty when there is nothing to bring up.
   std::function<int()> bring_up;
+  // And taken down after the last scan; empty when there is nothing to take down.
+  std::function<void()> shut_down;
 };
 
 }  // namespace
@@ -204,6 +206,7 @@ int run_control(ControlParts& parts, dds::DdsProcessIo& io, const ModeHooks& hoo
     }
   }
   runtime.wait();
+  if (hooks.shut_down) hooks.shut_down();
   drain();
   parts.controller.close_all_in_transit(io.last_scan_time_ns(), LostReason::kRunEnded);
   drain();
@@ -366,6 +369,15 @@ int control_over_can(ControlParts& parts) {
     spdlog::info("control: CANopen start-up in {:.0f} ms",
                  static_cast<double>(startup.duration_ns) / 1e6);
     return 0;
+  };
+  // After the last scan the drives are disabled and every node stopped (NMT), rather than
+  // left Operational to run into their command timeouts.
+  hooks.shut_down = [&] {
+    if (master.shut_down(drivers::monotonic_bus_clock())) {
+      spdlog::info("control: drives disabled, every CANopen node stopped (NMT stop)");
+    } else {
+      spdlog::warn("control: not every drive confirmed disabled before the NMT stop");
+    }
   };
   hooks.drain = [&] { master.log_events(); };
   hooks.report = [&](nlohmann::json& json) {

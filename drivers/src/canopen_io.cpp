@@ -733,4 +733,25 @@ StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
   return report;
 }
 
+bool CanopenIo::shut_down(const BusClock& clock) {
+  const OutputImage idle{};
+  InputImage in{};
+  const std::int64_t deadline_ns =
+      clock.now_ns() + std::int64_t{config_.enable_timeout_ms} * 1'000'000;
+  bool disabled = false;
+  while (!disabled && clock.now_ns() < deadline_ns) {
+    write(idle);
+    clock.wait_ns(config_.cycle_period_ns);
+    read(clock.now_ns(), in);
+    disabled = std::none_of(drives_.begin(), drives_.end(), [](const DriveRuntime& drive) {
+      return drive.state == cia402::State::kOperationEnabled;
+    });
+  }
+  if (!bus_.send(canopen::make_nmt(canopen::NmtCommand::kStop, canopen::kAllNodes))) {
+    ++counters_.send_failures;
+    return false;
+  }
+  return disabled;
+}
+
 }  // namespace fl::drivers

@@ -59,6 +59,22 @@ TEST(CanopenIo, StartUpWithoutEnablePrimesTheImageWithEveryDevice) {
   }
 }
 
+TEST(CanopenIo, ShutDownDisablesTheDrivesThenStopsEveryNode) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  for (int i = 0; i < 10; ++i) rig.scan(all_drives(true, 0.5F));
+  ASSERT_EQ(rig.drive(DriveId::kGuide).state().state, cia402::State::kOperationEnabled);
+  EXPECT_TRUE(rig.io.shut_down(rig.clock));
+  rig.advance(10'000'000);  // the NMT frame reaches the devices
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    EXPECT_NE(rig.drives[d]->state().state, cia402::State::kOperationEnabled) << "drive " << d;
+    EXPECT_EQ(rig.drives[d]->nmt_state(), canopen::NmtState::kStopped) << "drive " << d;
+  }
+  for (std::size_t m = 0; m < kIoModuleCount; ++m) {
+    EXPECT_EQ(rig.modules[m]->nmt_state(), canopen::NmtState::kStopped) << "module " << m;
+  }
+}
+
 TEST(CanopenIo, StartUpNamesANodeThatNeverBoots) {
   LoopbackRig rig;
   rig.drive(DriveId::kGuide).set_silent(true);

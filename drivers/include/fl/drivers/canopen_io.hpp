@@ -94,6 +94,11 @@ class CanopenIo final : public ProcessIo {
   // TPDOs had arrived, so that the next read() fills the whole image; enable_drives also takes
   // every drive to Operation Enabled at zero speed.
   StartupReport start_up(const BusClock& clock, bool enable_drives);
+  // Outside the cycle, after the last scan: cycles with every drive disabled and every
+  // actuator released until no drive reports Operation Enabled (within enable_timeout_ms),
+  // then NMT stop to every node, so that the devices leave Operational at once instead of
+  // running into their command timeouts. Returns whether every drive was seen disabled.
+  bool shut_down(const BusClock& clock);
 
   void read(std::int64_t now_ns, InputImage& in) override;
   void write(const OutputImage& out) override;
