@@ -594,6 +594,19 @@ bool CanopenIo::configure_io(SdoClient& sdo, std::size_t m, std::vector<std::str
                    canopen::layout::kIoTpdo1, problems);
 }
 
+bool CanopenIo::cycle_until(const BusClock& clock, const OutputImage& out, InputImage& in,
+                            const std::function<bool()>& done) {
+  const std::int64_t deadline_ns =
+      clock.now_ns() + std::int64_t{config_.enable_timeout_ms} * 1'000'000;
+  while (clock.now_ns() < deadline_ns) {
+    write(out);
+    clock.wait_ns(config_.cycle_period_ns);
+    read(clock.now_ns(), in);
+    if (done()) return true;
+  }
+  return false;
+}
+
 std::string CanopenIo::node_label(std::size_t slot) const {
   const std::string device =
       slot < kDriveCount
@@ -699,19 +712,15 @@ StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
       return nodes_[slot].heard && nodes_[slot].nmt == NmtState::kOperational;
     };
     const auto drive_done = [&](std::size_t d) { return !enable_drives || in.drives[d].ready; };
-    const std::int64_t deadline_ns =
-        clock.now_ns() + std::int64_t{config_.enable_timeout_ms} * 1'000'000;
-    bool done = false;
-    while (!done && clock.now_ns() < deadline_ns) {
-      write(out);
-      clock.wait_ns(config_.cycle_period_ns);
-      read(clock.now_ns(), in);
-      done = true;
+    const bool done = cycle_until(clock, out, in, [&] {
       for (std::size_t slot = 0; slot < kNodeCount; ++slot) {
-        done = done && node_answered(slot) && node_operational(slot) &&
-               (slot >= kDriveCount || drive_done(slot));
+        if (!node_answered(slot) || !node_operational(slot) ||
+            (slot < kDriveCount && !drive_done(slot))) {
+          return false;
+        }
       }
-    }
+      return true;
+    });
     if (!done) {
       const std::string within = " within " + std::to_string(config_.enable_timeout_ms) + " ms";
       for (std::size_t slot = 0; slot < kNodeCount; ++slot) {
@@ -734,19 +743,12 @@ StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
 }
 
 bool CanopenIo::shut_down(const BusClock& clock) {
-  const OutputImage idle{};
   InputImage in{};
-  const std::int64_t deadline_ns =
-      clock.now_ns() + std::int64_t{config_.enable_timeout_ms} * 1'000'000;
-  bool disabled = false;
-  while (!disabled && clock.now_ns() < deadline_ns) {
-    write(idle);
-    clock.wait_ns(config_.cycle_period_ns);
-    read(clock.now_ns(), in);
-    disabled = std::none_of(drives_.begin(), drives_.end(), [](const DriveRuntime& drive) {
+  const bool disabled = cycle_until(clock, OutputImage{}, in, [this] {
+    return std::none_of(drives_.begin(), drives_.end(), [](const DriveRuntime& drive) {
       return drive.state == cia402::State::kOperationEnabled;
     });
-  }
+  });
   if (!bus_.send(canopen::make_nmt(canopen::NmtCommand::kStop, canopen::kAllNodes))) {
     ++counters_.send_failures;
     return false;

@@ -59,6 +59,10 @@ bool wait_until(const std::function<bool()>& done, std::chrono::milliseconds tim
   return true;
 }
 
+std::string loopback_uri() {
+  return std::string("file://") + FL_DDS_CONFIG_DIR + "/cyclonedds-loopback.xml";
+}
+
 PeerProcess::PeerProcess(const std::vector<std::string>& args, const std::string& cyclonedds_uri)
     : PeerProcess(FL_DDS_PEER, args, cyclonedds_uri) {}
 

@@ -21,6 +21,9 @@ CameraFrame make_frame(CameraId camera, std::uint32_t sequence, std::int64_t fra
 // True when `frame` is make_frame(camera, frame.sequence, frame.frame_time_ns).
 bool frame_intact(CameraId camera, const CameraFrame& frame);
 
+// CYCLONEDDS_URI of the shipped loopback configuration (config/dds).
+std::string loopback_uri();
+
 // Polls `done` every millisecond until it is true or `timeout` passed.
 bool wait_until(const std::function<bool()>& done, std::chrono::milliseconds timeout,
                 std::chrono::milliseconds poll = std::chrono::milliseconds(1));

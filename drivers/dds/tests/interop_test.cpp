@@ -16,12 +16,9 @@ namespace fl::drivers::dds {
 namespace {
 
 using namespace std::chrono_literals;
+using test::loopback_uri;
 using test::PeerProcess;
 using test::wait_until;
-
-std::string loopback_uri() {
-  return std::string("file://") + FL_DDS_CONFIG_DIR + "/cyclonedds-loopback.xml";
-}
 
 TEST(DdsInterop, CameraNodeWrittenFromTheDocsIsRead) {
   constexpr int kDomain = 46;  // its own: the dds tests use 11-45, the two-process ones 50-58

@@ -15,12 +15,9 @@ namespace fl::drivers::dds {
 namespace {
 
 using namespace std::chrono_literals;
+using test::loopback_uri;
 using test::PeerProcess;
 using test::wait_until;
-
-std::string loopback_uri() {
-  return std::string("file://") + FL_DDS_CONFIG_DIR + "/cyclonedds-loopback.xml";
-}
 
 TEST(DdsTwoProcesses, EstimatesFromAnotherProcessArriveIntact) {
   Participant controller(21);

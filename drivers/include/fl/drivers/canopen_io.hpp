@@ -24,6 +24,7 @@
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -169,6 +170,10 @@ class CanopenIo final : public ProcessIo {
   void build_routes();
   void handle_frame(const CanFrame& frame, std::int64_t now_ns);
   void check_timeouts(std::int64_t now_ns);
+  // Outside the cycle: write `out`, a cycle period, read into `in`, until done() or
+  // enable_timeout_ms passed; whether done() came true.
+  bool cycle_until(const BusClock& clock, const OutputImage& out, InputImage& in,
+                   const std::function<bool()>& done);
   // "node 5 (drive takt)": how start-up problems name a node.
   std::string node_label(std::size_t slot) const;
   void fill_image(InputImage& in) const;
