@@ -85,7 +85,7 @@ struct DemFilletView {
   SideUp side = SideUp::kUnknown;
   double s_mm = 0.0;
   double y_mm = 0.0;
-  double z_mm = 0.0;  // centroid height over the belt plane
+  double z_mm = 0.0;  // centroid height over the reject belt's plane (engine z)
   double angle_rad = 0.0;
   double v_mps = 0.0;  // centroid speed along the line
   double min_s_mm = 0.0;
