@@ -86,9 +86,7 @@ void DemPlant::command_walls(double h_s) {
   // The plates' surfaces convey at the guide's speed down their slopes, as the guide's own
   // belt; plate 1 swings about its hinge (the belt's right edge, along the slope) to open.
   const double guide_mps = drives_.speed_mps(DriveId::kGuide);
-  const PlateLayout plates = plate_layout();
-  const Vec3 down_plate1 =
-      Vec3(plates.end_m - plates.start_m, 0.0, plates.end_z_m - plates.top_z_m).normalized();
+  const Vec3 down_plate1 = plate_layout().slide_direction;
   dem::WallState& plate1 = s.walls[wall_plate1_];
   const double swing_rad = stations_.plate1_travel *
                            static_cast<double>(config_.machinery.plate_swing_deg) *

@@ -59,6 +59,11 @@ DemPlant::PlateLayout DemPlant::plate_layout() const {
   p.top_z_m = m.plate1_drop_mm * kMm;
   p.end_z_m = m.plate1_end_height_mm * kMm;
   p.upstream_z_m = p.top_z_m - m.guide_rise_mm * kMm;
+  const double gap_m = 0.5 * m.belt_gap_mm * kMm;
+  const double right_m = -m.belt_half_width_mm * kMm;
+  p.hinge_m = Vec3(p.start_m + gap_m, right_m, p.top_z_m);
+  p.plate_end_m = Vec3(p.end_m - gap_m, right_m, p.end_z_m);
+  p.slide_direction = (p.plate_end_m - p.hinge_m).normalized();
   return p;
 }
 
@@ -142,8 +147,9 @@ std::shared_ptr<const dem::Model> DemPlant::build_model() const {
   // the way; under it the landing, at the reject belt's level, catches a fillet that falls.
   const PlateLayout plates = plate_layout();
   self->wall_plate1_ = spec.meshes.size();
-  spec.meshes.push_back(slope_rect("flip_plate1", equipment, plates.start_m + gap, plates.top_z_m,
-                                   plates.end_m - gap, plates.end_z_m, -half_w, half_w));
+  spec.meshes.push_back(slope_rect("flip_plate1", equipment, plates.hinge_m.x(), plates.hinge_m.z(),
+                                   plates.plate_end_m.x(), plates.plate_end_m.z(),
+                                   plates.hinge_m.y(), half_w));
   self->wall_landing_ = spec.meshes.size();
   spec.meshes.push_back(belt_rect("flip_plates_landing", equipment, plates.start_m + gap,
                                   plates.end_m - gap, -half_w, half_w));
@@ -235,10 +241,7 @@ void DemPlant::reset(std::uint64_t seed, InputImage& in) {
   state.walls[wall_pusher_].translation_m = Vec3(0.0, m.belt_half_width_mm * kMm + 0.15, 0.0);
   state.walls[wall_roller_].pivot_m =
       Vec3(line_.squeeze.roller_s_mm * kMm, 0.0, (m.roller_up_gap_mm + m.roller_radius_mm) * kMm);
-  const PlateLayout plates = plate_layout();
-  const double gap_m = 0.5 * m.belt_gap_mm * kMm;
-  state.walls[wall_plate1_].pivot_m =
-      Vec3(plates.start_m + gap_m, -m.belt_half_width_mm * kMm, plates.top_z_m);
+  state.walls[wall_plate1_].pivot_m = plate_layout().hinge_m;
   sim_->prepare();
 
   counters_ = DemPlantCounters{};

@@ -208,6 +208,11 @@ class DemPlant final : public Plant {
     double top_z_m = 0.0;       // plate 1's drop
     double end_z_m = 0.0;       // plate 1's lower edge, over the reject belt
     double upstream_z_m = 0.0;  // takt and transition belts, the guide's start
+    // Plate 1's mesh runs from its top edge (the hinge's end at the belt's right edge) down
+    // along slide_direction; it swings about that direction through the hinge point.
+    Eigen::Vector3d hinge_m = Eigen::Vector3d::Zero();
+    Eigen::Vector3d plate_end_m = Eigen::Vector3d::Zero();  // lower edge, the same side
+    Eigen::Vector3d slide_direction = Eigen::Vector3d::UnitX();
   };
   [[nodiscard]] PlateLayout plate_layout() const;
   // Height of the product path's surface at s (plates in their slide pose).
