@@ -36,7 +36,7 @@ constexpr std::size_t kControlBytes =
 }  // namespace
 
 SocketCanBus::SocketCanBus(const SocketCanOptions& options)
-    : interface_name_(options.interface_name) {
+    : interface_name_(options.interface_name), confirm_sends_(options.confirm_sends) {
   if (interface_name_.empty() || interface_name_.size() >= IFNAMSIZ) {
     throw SocketCanError("SocketCAN: interface name '" + interface_name_ + "' must have 1.." +
                          std::to_string(IFNAMSIZ - 1) + " characters");
@@ -72,7 +72,7 @@ SocketCanBus::SocketCanBus(const SocketCanOptions& options)
         0) {
       fail(interface_name_, "setsockopt(CAN_RAW_ERR_FILTER)");
     }
-    const int own = options.receive_own_frames ? 1 : 0;
+    const int own = options.receive_own_frames || options.confirm_sends ? 1 : 0;
     if (::setsockopt(socket_fd_, SOL_CAN_RAW, CAN_RAW_RECV_OWN_MSGS, &own, sizeof own) < 0) {
       fail(interface_name_, "setsockopt(CAN_RAW_RECV_OWN_MSGS)");
     }
@@ -121,9 +121,13 @@ bool SocketCanBus::send(const CanFrame& frame) {
   }
   raw.len = frame.dlc;
   std::memcpy(raw.data, frame.data.data(), frame.dlc);
+  const std::int64_t queued_ns = confirm_sends_ ? clock_ns(CLOCK_MONOTONIC) : 0;
   const ssize_t written = ::send(socket_fd_, &raw, sizeof raw, MSG_DONTWAIT);
   if (written == static_cast<ssize_t>(sizeof raw)) {
     ++counters_.frames_sent;
+    if (confirm_sends_) {
+      confirmations_.record_send(frame, queued_ns, counters_);
+    }
     return true;
   }
   // ENOBUFS: the interface's TX queue (txqueuelen) is full; EAGAIN: the socket send buffer
@@ -187,14 +191,20 @@ std::size_t SocketCanBus::receive(std::span<CanFrame> out) {
       apply_error_frame(raw.can_id & CAN_ERR_MASK, data);
       continue;
     }
-    CanFrame& frame = out[count];
-    frame = CanFrame{};
+    CanFrame frame;
     frame.extended = (raw.can_id & CAN_EFF_FLAG) != 0U;
     frame.remote = (raw.can_id & CAN_RTR_FLAG) != 0U;
     frame.id = raw.can_id & (frame.extended ? CAN_EFF_MASK : CAN_SFF_MASK);
     frame.dlc = raw.len;
     std::memcpy(frame.data.data(), raw.data, raw.len);
     frame.timestamp_ns = stamp_ns != 0 ? stamp_ns : clock_ns(CLOCK_MONOTONIC);
+    if (confirm_sends_ && (message.msg_flags & MSG_CONFIRM) != 0) {
+      // An echo of this socket's own frame: its stamp is the send time. One without a record
+      // (evicted, already counted as unconfirmed) is dropped.
+      confirmations_.confirm(frame, frame.timestamp_ns, counters_);
+      continue;
+    }
+    out[count] = frame;
     ++counters_.frames_received;
     ++count;
   }

@@ -207,6 +207,65 @@ TEST(BusLoad, WorstCaseFrameLengthsIncludeStuffBits) {
   EXPECT_EQ(worst_case_frame_bits(0), 55U);  // SYNC: 47 + 8 stuff bits
 }
 
+CanFrame numbered_frame(std::uint32_t id, std::uint8_t first_byte) {
+  CanFrame frame = make_frame(id, 1);
+  frame.data[0] = first_byte;
+  return frame;
+}
+
+TEST(SendConfirmations, EachEchoMatchesItsOwnSendEvenOutOfOrder) {
+  SendConfirmationQueue queue;
+  CanBusCounters counters;
+  queue.record_send(numbered_frame(0x205, 1), 100, counters);
+  queue.record_send(numbered_frame(0x080, 0), 200, counters);
+  queue.record_send(numbered_frame(0x205, 2), 300, counters);
+  // A controller with several TX buffers sends by priority: SYNC (0x080) wins arbitration.
+  EXPECT_TRUE(queue.confirm(numbered_frame(0x080, 0), 250, counters));
+  // Same id twice: the data tells them apart.
+  EXPECT_TRUE(queue.confirm(numbered_frame(0x205, 2), 350, counters));
+  EXPECT_TRUE(queue.confirm(numbered_frame(0x205, 1), 400, counters));
+  // Nothing was sent with these bytes: no record, no confirmation.
+  EXPECT_FALSE(queue.confirm(numbered_frame(0x205, 3), 450, counters));
+
+  std::array<CanSendConfirmation, 8> taken{};
+  ASSERT_EQ(queue.take(taken), 3U);
+  EXPECT_EQ(taken[0].id, 0x080U);
+  EXPECT_EQ(taken[0].queued_ns, 200);
+  EXPECT_EQ(taken[0].sent_ns, 250);
+  EXPECT_EQ(taken[1].queued_ns, 300);  // the second 0x205, by its data
+  EXPECT_EQ(taken[2].queued_ns, 100);
+  EXPECT_EQ(counters.sends_confirmed, 3U);
+  EXPECT_EQ(queue.take(taken), 0U);
+}
+
+TEST(SendConfirmations, LostEchoesAndAnIdleConsumerAreCountedNotGrown) {
+  SendConfirmationQueue queue;
+  CanBusCounters counters;
+  constexpr std::size_t kCapacity = SendConfirmationQueue::kCapacity;
+  // One more send than there are records: the oldest is given up as unconfirmed.
+  for (std::size_t i = 0; i <= kCapacity; ++i) {
+    queue.record_send(numbered_frame(0x300, static_cast<std::uint8_t>(i % 200)),
+                      static_cast<std::int64_t>(i), counters);
+  }
+  EXPECT_EQ(counters.sends_unconfirmed, 1U);
+  // Frame 0 was evicted, so its echo finds the next frame with byte 0: number 200.
+  ASSERT_TRUE(queue.confirm(numbered_frame(0x300, 0), 1000, counters));
+  std::array<CanSendConfirmation, 1> first{};
+  ASSERT_EQ(queue.take(first), 1U);
+  EXPECT_EQ(first[0].queued_ns, 200);
+
+  // Nobody takes confirmations: past the capacity they are dropped and counted.
+  SendConfirmationQueue idle;
+  CanBusCounters idle_counters;
+  for (std::size_t i = 0; i < kCapacity + 5; ++i) {
+    const CanFrame frame = numbered_frame(0x301, 7);
+    idle.record_send(frame, 0, idle_counters);
+    idle.confirm(frame, 1, idle_counters);
+  }
+  EXPECT_EQ(idle_counters.sends_confirmed, kCapacity + 5);
+  EXPECT_EQ(idle_counters.confirmations_dropped, 5U);
+}
+
 TEST(SocketCanErrors, ErrorFramesDriveTheErrorState) {
   // Class bits and data[1] values from linux/can/error.h.
   constexpr std::uint32_t kController = 0x004;

@@ -20,12 +20,17 @@ class LoopbackBus final : public CanBus {
  public:
   bool send(const CanFrame& frame) override;
   std::size_t receive(std::span<CanFrame> out) override;
+  std::size_t take_send_confirmations(std::span<CanSendConfirmation> out) override {
+    return confirmations_.take(out);
+  }
   [[nodiscard]] CanErrorState error_state() const override { return error_state_; }
   [[nodiscard]] const CanBusCounters& counters() const override { return counters_; }
 
   // Test hooks: force the error state; drop everything this endpoint sends (a dead node).
   void set_error_state(CanErrorState state) { error_state_ = state; }
   void set_transmit_enabled(bool enabled) { transmit_enabled_ = enabled; }
+  // Confirms every frame this endpoint puts on the hub, stamped with the hub's clock.
+  void set_send_confirmations(bool enabled) { confirm_sends_ = enabled; }
   // Puts a frame straight into this endpoint's receive queue (malformed-frame tests).
   void inject(const CanFrame& frame);
   [[nodiscard]] std::size_t pending() const { return count_; }
@@ -41,6 +46,8 @@ class LoopbackBus final : public CanBus {
   std::size_t count_ = 0;
   CanErrorState error_state_ = CanErrorState::kErrorActive;
   bool transmit_enabled_ = true;
+  bool confirm_sends_ = false;
+  SendConfirmationQueue confirmations_;
   CanBusCounters counters_;
 };
 
@@ -57,7 +64,8 @@ class LoopbackHub {
 
  private:
   friend class LoopbackBus;
-  void broadcast(const LoopbackBus& sender, const CanFrame& frame);
+  // Returns the stamp the frame was delivered with.
+  std::int64_t broadcast(const LoopbackBus& sender, const CanFrame& frame);
 
   std::function<std::int64_t()> clock_ns_;
   std::size_t capacity_;

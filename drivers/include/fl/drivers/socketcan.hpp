@@ -2,6 +2,13 @@
 // vcan0 in tests), non-blocking, with kernel receive timestamps (SO_TIMESTAMPNS) and error
 // frames (CAN_RAW_ERR_FILTER) from which it tracks the controller's error state.
 //
+// Send timestamps: with `confirm_sends` the socket receives its own frames back
+// (CAN_RAW_RECV_OWN_MSGS). The kernel marks them MSG_CONFIRM and stamps them when the driver
+// echoes them, which a real CAN driver does once the controller reports the frame sent; so
+// the stamp is when the frame left, and the gap to send() is the queueing and arbitration
+// delay. receive() turns those echoes into CanSendConfirmations instead of frames. The echo
+// passes the receive filters like any frame: a filtered-out id is never confirmed.
+//
 // Bus off and restart: the kernel's CAN driver, not this process, restarts a controller
 // after bus off, either automatically (`ip link set can0 type can bitrate 1000000
 // restart-ms 100`) or by hand (`ip link set can0 type can restart`). This class reports
@@ -31,6 +38,7 @@ struct SocketCanOptions {
   bool receive_error_frames = true;  // CAN_RAW_ERR_FILTER with every error class
   bool receive_own_frames = false;   // CAN_RAW_RECV_OWN_MSGS (tests only)
   int receive_buffer_bytes = 0;      // SO_RCVBUF; 0 leaves the kernel default
+  bool confirm_sends = false;        // own frames come back as send confirmations
 };
 
 // Thrown by the constructor (outside the cycle) with the failing call and errno text.
@@ -46,6 +54,9 @@ class SocketCanBus final : public CanBus {
 
   bool send(const CanFrame& frame) override;
   std::size_t receive(std::span<CanFrame> out) override;
+  std::size_t take_send_confirmations(std::span<CanSendConfirmation> out) override {
+    return confirmations_.take(out);
+  }
   [[nodiscard]] CanErrorState error_state() const override { return error_state_; }
   [[nodiscard]] const CanBusCounters& counters() const override { return counters_; }
 
@@ -63,7 +74,9 @@ class SocketCanBus final : public CanBus {
  private:
   std::string interface_name_;
   int socket_fd_ = -1;
+  bool confirm_sends_ = false;
   CanErrorState error_state_ = CanErrorState::kErrorActive;
+  SendConfirmationQueue confirmations_;
   CanBusCounters counters_;
 };
 
