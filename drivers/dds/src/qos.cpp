@@ -45,15 +45,24 @@ Qos status_qos() {
   return qos;
 }
 
-Qos ledger_qos() {
+namespace {
+
+// Reliable, transient-local, the last `history` samples kept for late subscribers.
+Qos kept_history_qos(std::int32_t history) {
   Qos qos = make_qos();
   dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, fl_LEDGER_HISTORY);
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, history);
   dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
-  dds_qset_durability_service(qos.get(), 0, DDS_HISTORY_KEEP_LAST, fl_LEDGER_HISTORY,
-                              DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
+  dds_qset_durability_service(qos.get(), 0, DDS_HISTORY_KEEP_LAST, history, DDS_LENGTH_UNLIMITED,
+                              DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
   return qos;
 }
+
+}  // namespace
+
+Qos ledger_qos() { return kept_history_qos(fl_LEDGER_HISTORY); }
+
+Qos faults_qos() { return kept_history_qos(fl_FAULT_HISTORY); }
 
 Qos kpis_qos() { return status_qos(); }
 

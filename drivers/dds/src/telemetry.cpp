@@ -2,9 +2,12 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <type_traits>
 
+#include "fl/controller/line_controller.hpp"
 #include "fl/drivers/dds/qos.hpp"
 
 namespace fl::drivers::dds {
@@ -79,6 +82,46 @@ void to_idl(const LineStatus& status, fl_LineKpis& sample) noexcept {
   sample.events_dropped = status.events_dropped;
 }
 
+std::optional<FaultReport> fault_report(const Event& event) {
+  if (event.code != EventCode::kFaultRaised && event.code != EventCode::kFaultCleared) {
+    return std::nullopt;
+  }
+  FaultReport report;
+  report.time_ns = event.time_ns;
+  report.origin = FaultOrigin::kLine;
+  report.active = event.code == EventCode::kFaultRaised;
+  report.code = event.source;  // the FaultCode
+  const auto code = static_cast<FaultCode>(event.source);
+  // The line controller puts the camera or drive index into the event's value; one that is
+  // no index names nothing rather than camera 0.
+  const float index = event.value;
+  const bool indexed = std::isfinite(index) && index >= 0.0F && index < 256.0F;
+  report.source = indexed ? static_cast<std::uint8_t>(index) : 0;
+  report.text = to_string(code);
+  if (indexed && (code == FaultCode::kCameraSilent || code == FaultCode::kEstimateFlood) &&
+      report.source < kCameraCount) {
+    report.text += ": camera ";
+    report.text += to_string(static_cast<CameraId>(report.source));
+  } else if (indexed && code == FaultCode::kDriveFault && report.source < kDriveCount) {
+    report.text += ": drive ";
+    report.text += to_string(static_cast<DriveId>(report.source));
+  }
+  report.text += report.active ? " (raised)" : " (cleared)";
+  return report;
+}
+
+void to_idl(const FaultReport& report, std::uint64_t number, fl_FaultReport& sample) noexcept {
+  sample.time_ns = report.time_ns;
+  sample.number = number;
+  sample.origin = static_cast<fl_FaultOrigin>(report.origin);
+  sample.active = report.active;
+  sample.code = report.code;
+  sample.source = report.source;
+  const std::size_t length = std::min(report.text.size(), sizeof sample.text - 1);
+  std::memcpy(sample.text, report.text.data(), length);
+  sample.text[length] = '\0';
+}
+
 void to_idl(const LineStatus& status, fl_CycleStatistics& sample) noexcept {
   const ScanTimingStatus& timing = status.timing;
   sample.time_ns = status.time_ns;
@@ -98,15 +141,18 @@ DdsTelemetryPublisher::DdsTelemetryPublisher(const Participant& participant, std
       ledger_topic_(participant, fl_FilletLedgerRecord_desc, kLedgerTopic),
       kpis_topic_(participant, fl_LineKpis_desc, kKpisTopic),
       cycle_topic_(participant, fl_CycleStatistics_desc, kCycleTopic),
+      faults_topic_(participant, fl_FaultReport_desc, kFaultsTopic),
       ledger_writer_(participant, ledger_topic_, ledger_qos().get()),
       kpis_writer_(participant, kpis_topic_, kpis_qos().get()),
-      cycle_writer_(participant, cycle_topic_, feedback_qos().get()) {}
+      cycle_writer_(participant, cycle_topic_, feedback_qos().get()),
+      faults_writer_(participant, faults_topic_, faults_qos().get()) {}
 
 void DdsTelemetryPublisher::count_failure(dds_return_t result, const char* topic) {
   if (result >= 0) return;
   if (counters_.write_failures++ == 0) {
-    spdlog::warn("telemetry: writing {} failed ({}); the ledger CSV still has every record", topic,
-                 dds_strretcode(result));
+    spdlog::warn(
+        "telemetry: writing {} failed ({}); the ledger CSV and the log keep what it carried", topic,
+        dds_strretcode(result));
   }
 }
 
@@ -116,6 +162,14 @@ void DdsTelemetryPublisher::publish(const FilletRecord& record) {
   const dds_return_t result = ledger_writer_.write(sample);
   count_failure(result, kLedgerTopic);
   if (result >= 0) ++counters_.records_published;
+}
+
+void DdsTelemetryPublisher::publish(const FaultReport& report) {
+  fl_FaultReport sample{};
+  to_idl(report, ++faults_numbered_, sample);
+  const dds_return_t result = faults_writer_.write(sample);
+  count_failure(result, kFaultsTopic);
+  if (result >= 0) ++counters_.faults_published;
 }
 
 bool DdsTelemetryPublisher::offer(const LineStatus& status) {

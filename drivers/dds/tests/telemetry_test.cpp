@@ -8,9 +8,12 @@
 
 #include <chrono>
 #include <cstring>
+#include <limits>
+#include <string>
 #include <vector>
 
 #include "dds_test_support.hpp"
+#include "fl/controller/line_controller.hpp"
 #include "fl/drivers/dds/qos.hpp"
 
 namespace fl::drivers::dds {
@@ -172,6 +175,84 @@ TEST(DdsTelemetry, KpisAndCycleStatisticsFollowTheSnapshotsOncePerPeriod) {
   EXPECT_EQ(cycle.back().period_ns, 10'000'000);
   EXPECT_EQ(cycle.back().scans, 6000U);
   EXPECT_EQ(cycle.back().max_wakeup_latency_ns, 143'000);
+}
+
+TEST(DdsTelemetry, FaultReportsArriveNumberedAndALateSubscriberGetsTheHistory) {
+  Participant controller(38);
+  DdsTelemetryPublisher publisher(controller);
+  // FAULT_HISTORY + 6 reports before anyone listens: the oldest 6 fall out of the history.
+  const std::uint32_t written = fl_FAULT_HISTORY + 6;
+  for (std::uint32_t i = 0; i < written; ++i) {
+    FaultReport report;
+    report.time_ns = 1'000'000LL * i;
+    report.origin = i % 2 == 0 ? FaultOrigin::kCanNode : FaultOrigin::kLine;
+    report.active = i % 3 != 0;
+    report.code = 0x2310U + i;
+    report.source = static_cast<std::uint8_t>(i % 16);
+    report.text = "report " + std::to_string(i);
+    if (i == written - 1) report.text = std::string(200, 'x');  // longer than the wire's 96
+    publisher.publish(report);
+  }
+  EXPECT_EQ(publisher.counters().faults_published, written);
+  Participant hmi(38);
+  const Topic topic(hmi, fl_FaultReport_desc, kFaultsTopic);
+  const Reader reader(hmi, topic, faults_qos().get());
+  std::vector<fl_FaultReport> received;
+  ASSERT_TRUE(wait_until(
+      [&] {
+        for (const auto& sample : take_all<fl_FaultReport>(reader)) received.push_back(sample);
+        return received.size() >= fl_FAULT_HISTORY;
+      },
+      kMatchTimeout));
+  ASSERT_EQ(received.size(), fl_FAULT_HISTORY);
+  for (std::size_t k = 0; k < received.size(); ++k) {
+    const std::uint32_t i = 6 + static_cast<std::uint32_t>(k);
+    const fl_FaultReport& sample = received[k];
+    EXPECT_EQ(sample.number, i + 1U);  // numbered from 1 in publication order
+    EXPECT_EQ(sample.time_ns, 1'000'000LL * i);
+    EXPECT_EQ(sample.origin, i % 2 == 0 ? fl_FAULT_ORIGIN_CAN_NODE : fl_FAULT_ORIGIN_LINE);
+    EXPECT_EQ(sample.active, i % 3 != 0);
+    EXPECT_EQ(sample.code, 0x2310U + i);
+    EXPECT_EQ(sample.source, i % 16);
+    if (i + 1 < written) {
+      EXPECT_STREQ(sample.text, ("report " + std::to_string(i)).c_str());
+    }
+  }
+  // Cut to the bound, still terminated.
+  EXPECT_EQ(std::string(received.back().text), std::string(96, 'x'));
+}
+
+TEST(DdsTelemetry, OnlyFaultEventsOfTheControllerBecomeReportsNamingTheirSource) {
+  const Event silent{5'000'000'000, EventCode::kFaultRaised, 0,
+                     static_cast<std::uint8_t>(FaultCode::kCameraSilent),
+                     static_cast<float>(CameraId::kPosition)};
+  const std::optional<FaultReport> raised = fault_report(silent);
+  ASSERT_TRUE(raised);
+  EXPECT_EQ(raised->origin, FaultOrigin::kLine);
+  EXPECT_TRUE(raised->active);
+  EXPECT_EQ(raised->code, static_cast<std::uint32_t>(FaultCode::kCameraSilent));
+  EXPECT_EQ(raised->source, static_cast<std::uint8_t>(CameraId::kPosition));
+  EXPECT_EQ(raised->time_ns, 5'000'000'000);
+  EXPECT_NE(raised->text.find(to_string(CameraId::kPosition)), std::string::npos) << raised->text;
+
+  const Event drive_back{6'000'000'000, EventCode::kFaultCleared, 0,
+                         static_cast<std::uint8_t>(FaultCode::kDriveFault),
+                         static_cast<float>(DriveId::kTakt)};
+  const std::optional<FaultReport> cleared = fault_report(drive_back);
+  ASSERT_TRUE(cleared);
+  EXPECT_FALSE(cleared->active);
+  EXPECT_NE(cleared->text.find(to_string(DriveId::kTakt)), std::string::npos) << cleared->text;
+
+  // A broken index is no index: source 0, and the text names no camera.
+  Event broken = silent;
+  broken.value = std::numeric_limits<float>::quiet_NaN();
+  ASSERT_TRUE(fault_report(broken));
+  EXPECT_EQ(fault_report(broken)->source, 0);
+  EXPECT_EQ(fault_report(broken)->text.find(": camera"), std::string::npos);
+
+  // Not a fault change: no report.
+  EXPECT_FALSE(fault_report(Event{0, EventCode::kItemCreated, 7, 0, 0.0F}));
+  EXPECT_FALSE(fault_report(Event{0, EventCode::kCameraSilent, 0, 1, 0.0F}));
 }
 
 TEST(DdsTelemetry, ACorruptLedgerSampleIsRefused) {

@@ -18,6 +18,7 @@ inline constexpr const char* kSensorsTopic = "fl/line/sensors";
 inline constexpr const char* kLedgerTopic = "fl/line/ledger";
 inline constexpr const char* kKpisTopic = "fl/line/kpis";
 inline constexpr const char* kCycleTopic = "fl/line/cycle";
+inline constexpr const char* kFaultsTopic = "fl/line/faults";
 
 // A silent camera is noticed after this many of its frame periods: one lost frame is
 // normal jitter, three in a row is a camera that stopped (and still well inside the
@@ -59,5 +60,8 @@ Qos ledger_qos();
 // KPIs: as the status (reliable keep-last 1, transient-local): a late dashboard gets the
 // current totals at once.
 Qos kpis_qos();
+// Fault reports: as the ledger with FAULT_HISTORY (the IDL's) kept: each report reaches a
+// live subscriber in order, a late one gets the recent history, and none blocks the writer.
+Qos faults_qos();
 
 }  // namespace fl::drivers::dds

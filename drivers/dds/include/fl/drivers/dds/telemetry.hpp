@@ -1,12 +1,14 @@
 // The controller's telemetry for the plant beyond the operator screen (MES, dashboards,
-// audits): every closed fillet record on fl/line/ledger, and once a period the KPIs
-// (fl/line/kpis) and the scan timing (fl/line/cycle) from the line status snapshots. Runs on
+// audits): every closed fillet record on fl/line/ledger, every fault raised or cleared on
+// fl/line/faults, and once a period the KPIs (fl/line/kpis) and the scan timing
+// (fl/line/cycle) from the line status snapshots. Runs on
 // a non-real-time thread (the one that drains the controller's ledger ring); DDS allocates
 // and locks inside.
 #pragma once
 
 #include <cstdint>
 #include <optional>
+#include <string>
 
 #include "fillet_line.h"
 #include "fl/controller/ledger.hpp"
@@ -21,8 +23,25 @@ std::optional<FilletRecord> from_idl(const fl_FilletLedgerRecord& sample) noexce
 void to_idl(const LineStatus& status, fl_LineKpis& sample) noexcept;
 void to_idl(const LineStatus& status, fl_CycleStatistics& sample) noexcept;
 
+// A fault raised or cleared, wherever it was detected (the IDL's FaultReport without the
+// number, which the publisher stamps).
+enum class FaultOrigin : std::uint8_t { kLine, kRuntime, kCanNode, kCanBus };
+struct FaultReport {
+  std::int64_t time_ns = 0;
+  FaultOrigin origin = FaultOrigin::kLine;
+  bool active = true;
+  std::uint32_t code = 0;
+  std::uint8_t source = 0;
+  std::string text;  // cut to the IDL's 96 characters on the wire
+};
+// The report of a controller event: kFaultRaised and kFaultCleared give one ("camera silent:
+// camera position"), every other event nullopt.
+std::optional<FaultReport> fault_report(const Event& event);
+void to_idl(const FaultReport& report, std::uint64_t number, fl_FaultReport& sample) noexcept;
+
 struct TelemetryCounters {
   std::uint64_t records_published = 0;
+  std::uint64_t faults_published = 0;
   std::uint64_t kpis_published = 0;
   std::uint64_t write_failures = 0;  // DDS refused a write (logged once per kind)
 };
@@ -36,6 +55,8 @@ class DdsTelemetryPublisher {
   // One closed record. A failed write is counted and logged, never thrown: the ledger CSV
   // beside it stays the record of truth.
   void publish(const FilletRecord& record);
+  // One fault report, numbered in publication order from 1. Failures as for records.
+  void publish(const FaultReport& report);
   // Publishes KPIs and cycle statistics from `status` when a period has passed since the
   // last publication (or none was made); returns whether it did.
   bool offer(const LineStatus& status);
@@ -43,6 +64,9 @@ class DdsTelemetryPublisher {
   [[nodiscard]] const TelemetryCounters& counters() const noexcept { return counters_; }
   [[nodiscard]] std::uint32_t matched_ledger_readers() const {
     return ledger_writer_.matched_readers();
+  }
+  [[nodiscard]] std::uint32_t matched_fault_readers() const {
+    return faults_writer_.matched_readers();
   }
 
  private:
@@ -52,9 +76,12 @@ class DdsTelemetryPublisher {
   Topic ledger_topic_;
   Topic kpis_topic_;
   Topic cycle_topic_;
+  Topic faults_topic_;
   Writer ledger_writer_;
   Writer kpis_writer_;
   Writer cycle_writer_;
+  Writer faults_writer_;
+  std::uint64_t faults_numbered_ = 0;
   std::optional<std::int64_t> last_offer_ns_;
   TelemetryCounters counters_;
 };
