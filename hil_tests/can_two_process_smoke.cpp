@@ -223,6 +223,15 @@ TEST_F(CanTwoProcess, ControlAndTwinRunTheLineOverVcan) {
   EXPECT_EQ(can["error_state"].get<std::string>(), "error active");
   EXPECT_GT(twin_kpis["twin"]["can"]["syncs_received"].get<int>(), 0);
   EXPECT_GT(control_kpis["dds"]["estimate_to_command_us"]["count"].get<int>(), 0);
+  // SYNC as the kernel stamped it going out: every frame confirmed, and the scan's absolute
+  // wake-ups keep its mean interval at the 10 ms period (20 %: skipped periods after
+  // overruns in the emulated guest lengthen single intervals by a period each).
+  const nlohmann::json& wire = can["on_the_wire"];
+  EXPECT_GT(wire["syncs"].get<int>(), 0);
+  EXPECT_EQ(wire["frames_unconfirmed"].get<int>(), 0);
+  // The start-up's resets and the shut-down's NMT stop were the master's own: no fault report.
+  EXPECT_EQ(control_kpis["dds"]["fault_reports_published"].get<int>(), 0);
+  EXPECT_NEAR(wire["sync_period_mean_ms"].get<double>(), 10.0, 2.0);
 
   if (peer) {
     // The independent peer saw every SYNC the master counted (candump ran before the master
@@ -250,6 +259,9 @@ TEST_F(CanTwoProcess, ControllerFaultsWhenTheDevicesFallSilent) {
   const nlohmann::json result = load(dir / "control.json");
   EXPECT_TRUE(result["runtime"]["line_faulted"].get<bool>());
   EXPECT_GT(result["can"]["nodes_lost"].get<int>(), 0);
+  // Each lost node went out on fl/line/faults, and the line's own fault with them.
+  EXPECT_GT(result["dds"]["fault_reports_published"].get<int>(),
+            result["can"]["nodes_lost"].get<int>());
   EXPECT_TRUE(result["ledger"]["balanced"].get<bool>());
   EXPECT_EQ(result["ledger"]["records_dropped"].get<int>(), 0);
   EXPECT_GT(result["ledger"]["items_created"].get<int>(), 0);

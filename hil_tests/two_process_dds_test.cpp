@@ -20,6 +20,10 @@
 #include <string_view>
 #include <vector>
 
+#include "fillet_line.h"
+#include "fl/controller/line_controller.hpp"
+#include "fl/drivers/dds/entity.hpp"
+#include "fl/drivers/dds/qos.hpp"
 #include "process_support.hpp"
 
 namespace fl {
@@ -133,6 +137,8 @@ TEST(TwoProcessDds, ControlAndTwinOverLoopbackMatchTheInProcessRun) {
             control_kpis["ledger"]["items_closed"].get<int>());
   EXPECT_GE(control_kpis["dds"]["kpis_published"].get<int>(), 60);
   EXPECT_EQ(control_kpis["dds"]["telemetry_write_failures"].get<int>(), 0);
+  // A clean run raises no fault, so fl/line/faults stays empty.
+  EXPECT_EQ(control_kpis["dds"]["fault_reports_published"].get<int>(), 0);
 
   // The KPIs of the lock-step run with the same seed.
   const double in_spec = twin_kpis["in_spec_share_of_singulated"].get<double>();
@@ -184,6 +190,7 @@ void write_tolerant_line_config(const fs::path& file) {
 struct PeerLossRun {
   int control_exit = -1;
   int twin_exit = -1;
+  std::vector<fl_FaultReport> faults;  // what a subscriber of fl/line/faults received
   nlohmann::json control;
   nlohmann::json twin;
   std::string logs;
@@ -196,6 +203,11 @@ PeerLossRun run_and_kill(const std::string& name, const std::string& domain, boo
   // 30 s of feeding that is never reached: the kill comes after about 6 s of it.
   const std::string duration = "30s";
   write_tolerant_line_config(dir / "line.yaml");
+  // A maintenance tool listening to the fault topic from before the start.
+  namespace dds = fl::drivers::dds;
+  const dds::Participant tool(static_cast<dds_domainid_t>(std::stoi(domain)));
+  const dds::Topic faults_topic(tool, fl_FaultReport_desc, dds::kFaultsTopic);
+  const dds::Reader faults_reader(tool, faults_topic, dds::faults_qos().get());
   const pid_t control =
       spawn({FL_LINECTL, "control", "--duration", duration, "--domain", domain, "--fifo",
              kControlFifo, "--config", (dir / "line.yaml").string(), "--json",
@@ -212,6 +224,12 @@ PeerLossRun run_and_kill(const std::string& name, const std::string& domain, boo
   run.twin_exit = wait_exit(twin);
   run.control_exit = wait_exit(control);
   run.logs = "control:\n" + text(dir / "control.log") + "\ntwin:\n" + text(dir / "twin.log");
+  fl_FaultReport sample{};
+  void* buffer = &sample;
+  dds_sample_info_t info{};
+  while (dds_take(faults_reader.get(), &buffer, &info, 1, 1) > 0) {
+    if (info.valid_data) run.faults.push_back(sample);
+  }
   // Only the survivor wrote its JSON.
   if (kill_twin) {
     run.control = load(dir / "control.json");
@@ -231,6 +249,18 @@ TEST(TwoProcessDds, ControllerFaultsAndStopsWhenTheTwinDies) {
   SCOPED_TRACE(run.control.dump());
   EXPECT_TRUE(run.control["runtime"]["line_faulted"].get<bool>());
   EXPECT_GT(run.control["dds"]["sensors_stale_scans"].get<int>(), 0);
+  // The fault went out on fl/line/faults: the open safety chain, raised by the line's logic,
+  // in reports numbered without a gap.
+  ASSERT_FALSE(run.faults.empty()) << run.logs;
+  const auto estop = std::find_if(run.faults.begin(), run.faults.end(), [](const auto& report) {
+    return report.origin == fl_FAULT_ORIGIN_LINE && report.active &&
+           report.code == static_cast<std::uint32_t>(fl::FaultCode::kEstop);
+  });
+  EXPECT_NE(estop, run.faults.end()) << run.faults.front().text;
+  for (std::size_t i = 0; i < run.faults.size(); ++i) {
+    EXPECT_EQ(run.faults[i].number, i + 1) << run.faults[i].text;
+  }
+  EXPECT_EQ(run.control["dds"]["fault_reports_published"].get<std::size_t>(), run.faults.size());
   // Nothing vanishes from the books: what was in transit is closed, every record written.
   EXPECT_TRUE(run.control["ledger"]["balanced"].get<bool>());
   EXPECT_EQ(run.control["ledger"]["records_dropped"].get<int>(), 0);
@@ -263,6 +293,11 @@ TEST(TwoProcessDds, ControlRunsForeverUntilSigtermThenStopsTheLineCleanly) {
   fs::create_directories(dir);
   const std::string domain = "58";
   write_tolerant_line_config(dir / "line.yaml");
+  // A maintenance tool listening to the fault topic from before the start.
+  namespace dds = fl::drivers::dds;
+  const dds::Participant tool(static_cast<dds_domainid_t>(std::stoi(domain)));
+  const dds::Topic faults_topic(tool, fl_FaultReport_desc, dds::kFaultsTopic);
+  const dds::Reader faults_reader(tool, faults_topic, dds::faults_qos().get());
   const pid_t control = spawn(
       {FL_LINECTL, "control", "--duration", "forever", "--domain", domain, "--fifo", kControlFifo,
        "--config", (dir / "line.yaml").string(), "--json", (dir / "control.json").string()},

@@ -13,12 +13,14 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 #include <thread>
 
 #include "cli_support.hpp"
 #include "fl/apps/closed_loop.hpp"
 #include "fl/controller/config_loader.hpp"
 #include "fl/controller/line_controller.hpp"
+#include "fl/controller/monotonic_clock.hpp"
 #include "fl/controller/runtime.hpp"
 #include "fl/drivers/can_config.hpp"
 #include "fl/drivers/canopen_io.hpp"
@@ -128,8 +130,11 @@ int run_control(ControlParts& parts, dds::DdsProcessIo& io, const ModeHooks& hoo
   options.fifo_priority = args.fifo_priority;
   options.lock_memory = args.lock_memory;
   options.cpu_dma_latency_us = args.cpu_dma_latency_us;
-  options.on_fault = [](RuntimeFault fault) {
+  // Called on the scan thread: the fault is published from the drain, not from there.
+  std::atomic<RuntimeFault> runtime_fault{RuntimeFault::kNone};
+  options.on_fault = [&runtime_fault](RuntimeFault fault) {
     spdlog::error("runtime fault: {}", to_string(fault));
+    runtime_fault.store(fault);
   };
   ScanRuntime runtime(io, parts.logic, options);
 
@@ -145,6 +150,13 @@ int run_control(ControlParts& parts, dds::DdsProcessIo& io, const ModeHooks& hoo
     while (auto event = parts.controller.events().pop()) {
       collector.add_event(*event);
       log_control_event(*event);
+      if (auto fault = dds::fault_report(*event)) parts.telemetry.publish(*fault);
+    }
+    if (const RuntimeFault fault = runtime_fault.exchange(RuntimeFault::kNone);
+        fault != RuntimeFault::kNone) {
+      parts.telemetry.publish(dds::FaultReport{monotonic_now_ns(), dds::FaultOrigin::kRuntime, true,
+                                               static_cast<std::uint32_t>(fault), 0,
+                                               std::string("scan runtime: ") + to_string(fault)});
     }
     hooks.drain();
   };
@@ -241,6 +253,7 @@ int run_control(ControlParts& parts, dds::DdsProcessIo& io, const ModeHooks& hoo
                  {"estimate_to_command_us", summary_json(latency.reaction)},
                  {"ledger_records_published", telemetry.records_published},
                  {"kpis_published", telemetry.kpis_published},
+                 {"fault_reports_published", telemetry.faults_published},
                  {"telemetry_write_failures", telemetry.write_failures}};
   hooks.report(json);
 
@@ -333,8 +346,9 @@ int control_over_can(ControlParts& parts) {
   config.interface_name = parts.args.can_interface;
   std::unique_ptr<drivers::SocketCanBus> bus;
   try {
-    bus = std::make_unique<drivers::SocketCanBus>(
-        drivers::SocketCanOptions{config.interface_name, {}, true, false, 0});
+    drivers::SocketCanOptions options{config.interface_name, {}, true, false, 0};
+    options.confirm_sends = true;  // SYNC period and send delay as they are on the wire
+    bus = std::make_unique<drivers::SocketCanBus>(options);
   } catch (const drivers::SocketCanError& error) {
     spdlog::error("control: --can {}: {}", config.interface_name, error.what());
     return 2;
@@ -342,6 +356,17 @@ int control_over_can(ControlParts& parts) {
   drivers::CanopenIo master(*bus, config);
   dds::DdsProcessIo io(parts.cameras, master, parts.output);
   ModeHooks hooks;
+  // Every node or bus fault the master reports goes onto fl/line/faults as well as the log.
+  const auto publish_can_fault = [&parts](const drivers::CanopenEvent& event) {
+    const std::optional<bool> raised = drivers::fault_transition(event);
+    if (!raised) return;
+    const bool on_bus = event.kind == drivers::CanopenEventKind::kBusStateChanged;
+    const bool emergency = event.kind == drivers::CanopenEventKind::kEmergency ||
+                           event.kind == drivers::CanopenEventKind::kEmergencyCleared;
+    parts.telemetry.publish(dds::FaultReport{
+        event.time_ns, on_bus ? dds::FaultOrigin::kCanBus : dds::FaultOrigin::kCanNode, *raised,
+        on_bus || emergency ? event.code : 0U, event.node, drivers::describe(event)});
+  };
 
   // Start-up (NMT reset, SDO configuration, NMT start) until every node answers: on power-up
   // the drives may still be booting, and a twin may start later. The drives are enabled by
@@ -355,7 +380,7 @@ int control_over_can(ControlParts& parts) {
     const bool up = wait_until(
         [&] {
           startup = master.start_up(drivers::monotonic_bus_clock(), /*enable_drives=*/false);
-          master.log_events();
+          master.log_events(publish_can_fault);
           return startup.ok;
         },
         parts.times.wait_s, [] { return g_control_interrupts.load() > 0; },
@@ -379,7 +404,7 @@ int control_over_can(ControlParts& parts) {
       spdlog::warn("control: not every drive confirmed disabled before the NMT stop");
     }
   };
-  hooks.drain = [&] { master.log_events(); };
+  hooks.drain = [&] { master.log_events(publish_can_fault); };
   hooks.report = [&](nlohmann::json& json) {
     const drivers::CanopenCounters& counts = master.counters();
     const drivers::CanBusCounters& frames = bus->counters();
@@ -395,6 +420,18 @@ int control_over_can(ControlParts& parts) {
                    {"events_dropped", counts.events_dropped},
                    {"nodes_lost", counts.heartbeats_lost},
                    {"error_state", drivers::to_string(bus->error_state())}};
+    const drivers::CanBusTiming& timing = master.bus_timing();
+    json["can"]["on_the_wire"] = {
+        {"syncs", timing.syncs_on_bus},
+        {"sync_period_mean_ms", timing.sync_period_mean_ns() / 1e6},
+        {"sync_period_min_ms", static_cast<double>(timing.sync_period_min_ns) / 1e6},
+        {"sync_period_max_ms", static_cast<double>(timing.sync_period_max_ns) / 1e6},
+        {"sync_jitter_ms",
+         static_cast<double>(timing.sync_jitter_ns(config.cycle_period_ns)) / 1e6},
+        {"frames_confirmed", timing.frames_confirmed},
+        {"frames_unconfirmed", frames.sends_unconfirmed},
+        {"send_delay_mean_us", timing.send_delay_mean_ns() / 1e3},
+        {"send_delay_max_us", static_cast<double>(timing.send_delay_max_ns) / 1e3}};
   };
   hooks.print = [&] {
     std::printf(
@@ -406,6 +443,16 @@ int control_over_can(ControlParts& parts) {
         static_cast<unsigned long long>(master.counters().frames_handled),
         static_cast<unsigned long long>(master.counters().send_failures),
         static_cast<unsigned long long>(master.counters().heartbeats_lost));
+    const drivers::CanBusTiming& timing = master.bus_timing();
+    if (timing.sync_periods > 0) {
+      std::printf(
+          "can timing      SYNC every %.3f ms (min %.3f, max %.3f, jitter %.3f ms); send() "
+          "to bus mean %.1f us, max %.1f us\n",
+          timing.sync_period_mean_ns() / 1e6, static_cast<double>(timing.sync_period_min_ns) / 1e6,
+          static_cast<double>(timing.sync_period_max_ns) / 1e6,
+          static_cast<double>(timing.sync_jitter_ns(config.cycle_period_ns)) / 1e6,
+          timing.send_delay_mean_ns() / 1e3, static_cast<double>(timing.send_delay_max_ns) / 1e3);
+    }
   };
   hooks.peer_lost = [&] { return master.counters().heartbeats_lost > 0; };
   return run_control(parts, io, hooks);

@@ -4,7 +4,10 @@
 #include <charconv>
 #include <cmath>
 #include <map>
+#include <span>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "fl/controller/config_loader.hpp"
 #include "fl/controller/yaml_reader.hpp"
@@ -50,6 +53,128 @@ std::uint16_t read_ms(YamlMapReader& map, std::string_view key, double min_ms, d
   return map.read_int<std::uint16_t>(key, Range::closed(min_ms, max_ms));
 }
 
+constexpr std::array<PdoSignalInfo, static_cast<std::size_t>(PdoSignal::kCount)> kPdoSignals{{
+    {PdoSignal::kControlword, {0x6040, 0, 16}, true, true, "controlword"},
+    {PdoSignal::kTargetVelocity, {0x60FF, 0, 32}, true, true, "target velocity"},
+    {PdoSignal::kProfileAcceleration, {0x6083, 0, 32}, true, true, "profile acceleration"},
+    {PdoSignal::kProfileDeceleration, {0x6084, 0, 32}, true, true, "profile deceleration"},
+    {PdoSignal::kStatusword, {0x6041, 0, 16}, true, false, "statusword"},
+    {PdoSignal::kPositionActual, {0x6064, 0, 32}, true, false, "position actual"},
+    {PdoSignal::kVelocityActual, {0x606C, 0, 32}, true, false, "velocity actual"},
+    {PdoSignal::kDigitalOutputs, {0x6200, 1, 8}, false, true, "digital outputs 1-8"},
+    {PdoSignal::kAnalogOutput1, {0x6411, 1, 16}, false, true, "analogue output 1"},
+    {PdoSignal::kAnalogOutput2, {0x6411, 2, 16}, false, true, "analogue output 2"},
+    {PdoSignal::kAnalogOutput3, {0x6411, 3, 16}, false, true, "analogue output 3"},
+    {PdoSignal::kDigitalInputs, {0x6000, 1, 8}, false, false, "digital inputs 1-8"},
+    {PdoSignal::kAnalogInput1, {0x6401, 1, 16}, false, false, "analogue input 1"},
+    {PdoSignal::kAnalogInput2, {0x6401, 2, 16}, false, false, "analogue input 2"},
+    {PdoSignal::kAnalogInput3, {0x6401, 3, 16}, false, false, "analogue input 3"},
+}};
+
+std::string hex_text(std::uint32_t value, int digits) {
+  static constexpr char kDigits[] = "0123456789ABCDEF";
+  std::string text = "0x";
+  for (int shift = 4 * (digits - 1); shift >= 0; shift -= 4) {
+    text += kDigits[(value >> static_cast<unsigned>(shift)) & 0xFU];
+  }
+  return text;
+}
+
+// "0x60400010 (controlword)": how problems name a mapped object.
+std::string describe_object(const canopen::PdoEntry& entry) {
+  std::string text = hex_text(entry.mapping_value(), 8);
+  if (const std::optional<PdoSignal> signal = find_pdo_signal(entry)) {
+    text += " (" + std::string(info(*signal).name) + ")";
+  }
+  return text;
+}
+
+// One PDO's mapping: a sequence of mapping values as the device's 0x16xx/0x1Axx sub-entries
+// hold them ("0x60400010": index 0x6040, sub-index 0x00, 16 bits), each an object of this
+// device kind and direction.
+canopen::PdoMapping read_pdo_mapping(YamlMapReader& map, std::string_view key, bool drive,
+                                     bool to_device) {
+  canopen::PdoMapping mapping;
+  const std::vector<std::string> texts = map.read_strings(key);
+  if (texts.size() > canopen::kMaxPdoEntries) {
+    map.report(key, ProblemKind::kInvalidValue,
+               "maps " + std::to_string(texts.size()) + " objects, a PDO holds at most " +
+                   std::to_string(canopen::kMaxPdoEntries));
+    return mapping;
+  }
+  const char* device = drive ? "a drive" : "an I/O module";
+  for (std::size_t i = 0; i < texts.size(); ++i) {
+    const std::string& text = texts[i];
+    const std::string element = "element " + std::to_string(i) + " \"" + text + "\": ";
+    std::uint32_t value = 0;
+    const bool hex = text.size() > 2 && text[0] == '0' && (text[1] == 'x' || text[1] == 'X');
+    const char* last = text.data() + text.size();
+    const auto [end, error] = std::from_chars(text.data() + (hex ? 2 : 0), last, value, 16);
+    if (!hex || error != std::errc{} || end != last) {
+      map.report(key, ProblemKind::kWrongType,
+                 element +
+                     "expected a mapping value such as 0x60400010 (index 0x6040, "
+                     "sub-index 0x00, 16 bits)");
+      continue;
+    }
+    const canopen::PdoEntry entry = canopen::PdoEntry::from_mapping_value(value);
+    const std::optional<PdoSignal> signal = find_pdo_signal(entry);
+    if (!signal || info(*signal).drive != drive) {
+      std::string known;
+      for (const PdoSignalInfo& candidate : pdo_signals()) {
+        if (candidate.drive == drive && candidate.to_device == to_device) {
+          known += (known.empty() ? "" : ", ") + describe_object(candidate.object);
+        }
+      }
+      map.report(key, ProblemKind::kInvalidValue,
+                 element + "not an object this master exchanges with " + device +
+                     " (index, sub-index and length must match); this PDO can carry " + known);
+      continue;
+    }
+    if (info(*signal).to_device != to_device) {
+      map.report(key, ProblemKind::kInvalidValue,
+                 element + std::string(info(*signal).name) +
+                     (to_device ? " is sent by the device: it belongs in a TPDO"
+                                : " is sent by the master: it belongs in an RPDO"));
+      continue;
+    }
+    mapping.entries[mapping.count++] = entry;
+  }
+  if (mapping.bytes() > kCanMaxDataBytes) {
+    map.report(key, ProblemKind::kInvalidValue,
+               "carries " + std::to_string(mapping.bytes()) + " bytes, more than a CAN frame's " +
+                   std::to_string(kCanMaxDataBytes));
+  }
+  return mapping;
+}
+
+// Every signal of the device kind is carried, and by one PDO only.
+void check_pdo_signals(
+    YamlReader& reader, const std::string& path, bool drive,
+    std::span<const std::pair<std::string_view, const canopen::PdoMapping*>> pdos) {
+  std::array<std::string_view, static_cast<std::size_t>(PdoSignal::kCount)> carrier{};
+  for (const auto& [key, mapping] : pdos) {
+    for (std::uint8_t i = 0; i < mapping->count; ++i) {
+      const std::optional<PdoSignal> signal = find_pdo_signal(mapping->entries[i]);
+      if (!signal) continue;  // already reported
+      std::string_view& owner = carrier[static_cast<std::size_t>(*signal)];
+      if (!owner.empty()) {
+        reader.report_at(
+            path + "." + std::string(key), ProblemKind::kInconsistent,
+            describe_object(mapping->entries[i]) + " is also mapped in " + std::string(owner));
+      }
+      owner = key;
+    }
+  }
+  for (const PdoSignalInfo& signal : pdo_signals()) {
+    if (signal.drive == drive && carrier[static_cast<std::size_t>(signal.signal)].empty()) {
+      reader.report_at(path, ProblemKind::kInconsistent,
+                       "no PDO carries " + describe_object(signal.object) +
+                           ": the master exchanges it every cycle");
+    }
+  }
+}
+
 struct DriveDefaults {
   double velocity_units_per_mps = 0.0;
   double acceleration_units_per_mps2 = 0.0;
@@ -60,6 +185,22 @@ struct DriveDefaults {
 };
 
 }  // namespace
+
+std::span<const PdoSignalInfo> pdo_signals() { return kPdoSignals; }
+
+const PdoSignalInfo& info(PdoSignal signal) {
+  return kPdoSignals[static_cast<std::size_t>(signal)];
+}
+
+std::optional<PdoSignal> find_pdo_signal(const canopen::PdoEntry& entry) {
+  for (const PdoSignalInfo& candidate : kPdoSignals) {
+    if (candidate.object.index == entry.index && candidate.object.subindex == entry.subindex &&
+        candidate.object.bits == entry.bits) {
+      return candidate.signal;
+    }
+  }
+  return std::nullopt;
+}
 
 std::string_view config_name(IoModuleId id) {
   switch (id) {
@@ -189,6 +330,36 @@ CanConfig read_can_config(YamlReader& reader, const LineConfig& line) {
           scaling.read_float("centring_mm_per_count", Range::positive());
       scaling.finish();
     }
+    // Optional: without it, canopen::layout's mappings (the defaults of CanConfig).
+    if (root.has("pdo_mapping")) {
+      YamlMapReader mapping = root.map("pdo_mapping");
+      if (mapping.has("drive")) {
+        YamlMapReader drive = mapping.map("drive");
+        DrivePdoMappings& pdos = config.drive_pdos;
+        pdos.rpdo1 = read_pdo_mapping(drive, "rpdo1", true, true);
+        pdos.rpdo2 = read_pdo_mapping(drive, "rpdo2", true, true);
+        pdos.tpdo1 = read_pdo_mapping(drive, "tpdo1", true, false);
+        pdos.tpdo2 = read_pdo_mapping(drive, "tpdo2", true, false);
+        drive.finish();
+        const std::array<std::pair<std::string_view, const canopen::PdoMapping*>, 4> all{
+            {{"rpdo1", &pdos.rpdo1},
+             {"rpdo2", &pdos.rpdo2},
+             {"tpdo1", &pdos.tpdo1},
+             {"tpdo2", &pdos.tpdo2}}};
+        check_pdo_signals(reader, "pdo_mapping.drive", true, all);
+      }
+      if (mapping.has("io_module")) {
+        YamlMapReader io = mapping.map("io_module");
+        IoPdoMappings& pdos = config.io_pdos;
+        pdos.rpdo1 = read_pdo_mapping(io, "rpdo1", false, true);
+        pdos.tpdo1 = read_pdo_mapping(io, "tpdo1", false, false);
+        io.finish();
+        const std::array<std::pair<std::string_view, const canopen::PdoMapping*>, 2> all{
+            {{"rpdo1", &pdos.rpdo1}, {"tpdo1", &pdos.tpdo1}}};
+        check_pdo_signals(reader, "pdo_mapping.io_module", false, all);
+      }
+      mapping.finish();
+    }
     root.finish();
   }
   if (!reader.ok()) {
@@ -274,35 +445,48 @@ CanConfig load_can_config(const std::filesystem::path& file, const LineConfig& l
 }
 
 double estimate_bus_load(const CanConfig& config) {
-  using canopen::worst_case_frame_bits;
-  namespace layout = canopen::layout;
+  const auto frame_bits = [](const canopen::PdoMapping& mapping) {
+    // An empty PDO is never sent.
+    return mapping.count == 0
+               ? 0.0
+               : canopen::worst_case_frame_bits(static_cast<std::uint32_t>(mapping.bytes()));
+  };
   const double cycle_s = static_cast<double>(config.cycle_period_ns) / 1e9;
   if (cycle_s <= 0.0 || config.bitrate_bps == 0) {
     return 0.0;
   }
-  double bits_per_cycle = worst_case_frame_bits(0);  // SYNC
+  const DrivePdoMappings& drive_pdos = config.drive_pdos;
+  double bits_per_cycle = canopen::worst_case_frame_bits(0);  // SYNC
   for (const DriveNodeConfig& drive : config.drives) {
-    bits_per_cycle +=
-        worst_case_frame_bits(static_cast<std::uint32_t>(layout::kDriveRpdo1.bytes()));
-    bits_per_cycle +=
-        worst_case_frame_bits(static_cast<std::uint32_t>(layout::kDriveTpdo1.bytes()));
-    bits_per_cycle +=
-        worst_case_frame_bits(static_cast<std::uint32_t>(layout::kDriveTpdo2.bytes())) /
-        static_cast<double>(std::max<std::uint8_t>(drive.tpdo2_every_syncs, 1));
-    // RPDO2 is sent on change; a takt stroke changes it twice per second at most: one per
-    // 50 cycles is a generous average.
-    bits_per_cycle +=
-        worst_case_frame_bits(static_cast<std::uint32_t>(layout::kDriveRpdo2.bytes())) / 50.0;
-    bits_per_cycle += worst_case_frame_bits(1) * cycle_s * 1000.0 /
+    // An RPDO with only the ramps is sent on change; a takt stroke changes them twice per
+    // second at most: one per 50 cycles is a generous average.
+    for (const canopen::PdoMapping* rpdo : {&drive_pdos.rpdo1, &drive_pdos.rpdo2}) {
+      bits_per_cycle += frame_bits(*rpdo) / (carries_cyclic_command(*rpdo) ? 1.0 : 50.0);
+    }
+    bits_per_cycle += frame_bits(drive_pdos.tpdo1);
+    bits_per_cycle += frame_bits(drive_pdos.tpdo2) /
+                      static_cast<double>(std::max<std::uint8_t>(drive.tpdo2_every_syncs, 1));
+    bits_per_cycle += canopen::worst_case_frame_bits(1) * cycle_s * 1000.0 /
                       std::max<double>(drive.heartbeat_producer_ms, 1.0);
   }
   for (const IoModuleConfig& module : config.io_modules) {
-    bits_per_cycle += worst_case_frame_bits(static_cast<std::uint32_t>(layout::kIoRpdo1.bytes()));
-    bits_per_cycle += worst_case_frame_bits(static_cast<std::uint32_t>(layout::kIoTpdo1.bytes()));
-    bits_per_cycle += worst_case_frame_bits(1) * cycle_s * 1000.0 /
+    bits_per_cycle += frame_bits(config.io_pdos.rpdo1);
+    bits_per_cycle += frame_bits(config.io_pdos.tpdo1);
+    bits_per_cycle += canopen::worst_case_frame_bits(1) * cycle_s * 1000.0 /
                       std::max<double>(module.heartbeat_producer_ms, 1.0);
   }
   return bits_per_cycle / cycle_s / static_cast<double>(config.bitrate_bps);
+}
+
+bool carries_cyclic_command(const canopen::PdoMapping& mapping) {
+  for (std::uint8_t i = 0; i < mapping.count; ++i) {
+    const std::optional<PdoSignal> signal = find_pdo_signal(mapping.entries[i]);
+    if (signal == PdoSignal::kControlword || signal == PdoSignal::kTargetVelocity ||
+        (signal && !info(*signal).drive)) {
+      return true;
+    }
+  }
+  return false;
 }
 
 }  // namespace fl::drivers

@@ -21,6 +21,11 @@ namespace {
 
 constexpr std::uint8_t kSynchronous = 1;    // PDO transmission type: every SYNC
 constexpr std::uint8_t kEventDriven = 255;  // RPDO: applied on receipt
+
+// A cyclic RPDO takes effect at the SYNC, with every other; a ramp-only one on receipt.
+std::uint8_t rpdo_transmission(const canopen::PdoMapping& mapping) {
+  return carries_cyclic_command(mapping) ? kSynchronous : kEventDriven;
+}
 constexpr std::uint16_t kProfileVelocityMode = 3;
 constexpr std::uint32_t kDeviceProfileMask = 0xFFFF;  // 0x1000 low word: the CiA profile
 constexpr std::uint32_t kDriveProfile = 402;
@@ -77,6 +82,42 @@ std::string describe(const CanopenEvent& event) {
       break;
   }
   return text;
+}
+
+std::optional<bool> fault_transition(const CanopenEvent& event) {
+  const auto drive_faulted = [](std::uint32_t state) {
+    return state == static_cast<std::uint32_t>(cia402::State::kFault) ||
+           state == static_cast<std::uint32_t>(cia402::State::kFaultReactionActive);
+  };
+  const auto operational = [](std::uint32_t state) {
+    return state == static_cast<std::uint32_t>(NmtState::kOperational);
+  };
+  const auto bus_off = [](std::uint32_t state) {
+    return state == static_cast<std::uint32_t>(CanErrorState::kBusOff);
+  };
+  // For the state changes, `code` is the new state and `detail` the one before.
+  const auto changed = [&event](const auto& is_fault) -> std::optional<bool> {
+    const bool now = is_fault(event.code);
+    if (now == is_fault(event.detail)) return std::nullopt;
+    return now;
+  };
+  if (event.commanded) return std::nullopt;
+  switch (event.kind) {
+    case CanopenEventKind::kHeartbeatLost:
+    case CanopenEventKind::kEmergency:
+    case CanopenEventKind::kBootUp:  // cleared only by the next start_up()
+      return true;
+    case CanopenEventKind::kHeartbeatRecovered:
+    case CanopenEventKind::kEmergencyCleared:
+      return false;
+    case CanopenEventKind::kNmtStateChanged:
+      return changed([&](std::uint32_t state) { return !operational(state); });
+    case CanopenEventKind::kDriveStateChanged:
+      return changed(drive_faulted);
+    case CanopenEventKind::kBusStateChanged:
+      return changed(bus_off);
+  }
+  return std::nullopt;
 }
 
 CanopenIo::CanopenIo(CanBus& bus, CanConfig config) : bus_(bus), config_(std::move(config)) {
@@ -145,14 +186,66 @@ void CanopenIo::read(std::int64_t now_ns, InputImage& in) {
       break;
     }
   }
+  take_send_confirmations();
   const CanErrorState bus_state = bus_.error_state();
   if (bus_state != bus_state_) {
+    const auto previous = static_cast<std::uint8_t>(bus_state_);
     bus_state_ = bus_state;
-    push_event(CanopenEventKind::kBusStateChanged, 0, now_ns,
-               static_cast<std::uint32_t>(bus_state));
+    push_event(CanopenEventKind::kBusStateChanged, 0, now_ns, static_cast<std::uint32_t>(bus_state),
+               previous);
   }
   check_timeouts(now_ns);
   fill_image(in);
+}
+
+void CanopenIo::take_send_confirmations() {
+  for (std::size_t batch = 0; batch < kMaxBatchesPerRead; ++batch) {
+    const std::size_t count = bus_.take_send_confirmations(confirmation_buffer_);
+    for (std::size_t i = 0; i < count; ++i) {
+      const CanSendConfirmation& sent = confirmation_buffer_[i];
+      CanBusTiming& timing = bus_timing_;
+      const std::int64_t delay_ns = sent.sent_ns - sent.queued_ns;
+      ++timing.frames_confirmed;
+      timing.send_delay_sum_ns += delay_ns;
+      timing.send_delay_max_ns = std::max(timing.send_delay_max_ns, delay_ns);
+      if (sent.id != canopen::kSyncCobId) {
+        continue;
+      }
+      ++timing.syncs_on_bus;
+      if (last_sync_sent_ns_ != 0) {
+        const std::int64_t period_ns = sent.sent_ns - last_sync_sent_ns_;
+        timing.sync_period_min_ns =
+            timing.sync_periods == 0 ? period_ns : std::min(timing.sync_period_min_ns, period_ns);
+        timing.sync_period_max_ns = std::max(timing.sync_period_max_ns, period_ns);
+        timing.sync_period_sum_ns += period_ns;
+        ++timing.sync_periods;
+      }
+      last_sync_sent_ns_ = sent.sent_ns;
+    }
+    if (count < confirmation_buffer_.size()) {
+      break;
+    }
+  }
+}
+
+double CanBusTiming::sync_period_mean_ns() const {
+  return sync_periods == 0
+             ? 0.0
+             : static_cast<double>(sync_period_sum_ns) / static_cast<double>(sync_periods);
+}
+
+std::int64_t CanBusTiming::sync_jitter_ns(std::int64_t cycle_period_ns) const {
+  if (sync_periods == 0) {
+    return 0;
+  }
+  return std::max(std::abs(sync_period_min_ns - cycle_period_ns),
+                  std::abs(sync_period_max_ns - cycle_period_ns));
+}
+
+double CanBusTiming::send_delay_mean_ns() const {
+  return frames_confirmed == 0
+             ? 0.0
+             : static_cast<double>(send_delay_sum_ns) / static_cast<double>(frames_confirmed);
 }
 
 void CanopenIo::handle_frame(const CanFrame& frame, std::int64_t now_ns) {
@@ -186,9 +279,10 @@ void CanopenIo::handle_frame(const CanFrame& frame, std::int64_t now_ns) {
         return;
       }
       if (*state != node.nmt) {
+        const auto previous = static_cast<std::uint8_t>(node.nmt);
         node.nmt = *state;
         push_event(CanopenEventKind::kNmtStateChanged, node.id, now_ns,
-                   static_cast<std::uint32_t>(*state));
+                   static_cast<std::uint32_t>(*state), previous);
       }
       return;
     }
@@ -208,22 +302,67 @@ void CanopenIo::handle_frame(const CanFrame& frame, std::int64_t now_ns) {
     case Route::kSdoResponse:
       ++counters_.unexpected_sdo;  // no SDO transfer runs inside the cycle
       return;
-    case Route::kDriveTpdo1: {
-      std::array<std::uint32_t, 2> values{};
-      if (!canopen::unpack_pdo(frame, canopen::layout::kDriveTpdo1, values)) {
+    case Route::kDriveTpdo1:
+    case Route::kDriveTpdo2: {
+      const canopen::PdoMapping& mapping =
+          entry.route == Route::kDriveTpdo1 ? config_.drive_pdos.tpdo1 : config_.drive_pdos.tpdo2;
+      std::array<std::uint32_t, canopen::kMaxPdoEntries> values{};
+      if (!canopen::unpack_pdo(frame, mapping, std::span(values.data(), mapping.count))) {
         ++counters_.malformed_frames;
         return;
       }
-      DriveRuntime& drive = drives_[entry.slot];
-      drive.statusword = static_cast<std::uint16_t>(values[0]);
+      for (std::uint8_t i = 0; i < mapping.count; ++i) {
+        apply_drive_signal(entry.slot, signal_of(mapping, i), values[i], now_ns);
+      }
+      return;
+    }
+    case Route::kIoTpdo1: {
+      const canopen::PdoMapping& mapping = config_.io_pdos.tpdo1;
+      std::array<std::uint32_t, canopen::kMaxPdoEntries> values{};
+      if (!canopen::unpack_pdo(frame, mapping, std::span(values.data(), mapping.count))) {
+        ++counters_.malformed_frames;
+        return;
+      }
+      IoRuntime& module = io_[entry.slot];
+      for (std::uint8_t i = 0; i < mapping.count; ++i) {
+        const PdoSignal signal = signal_of(mapping, i);
+        if (signal == PdoSignal::kDigitalInputs) {
+          module.digital_inputs = static_cast<std::uint8_t>(values[i]);
+        } else {
+          const auto channel =
+              static_cast<std::size_t>(signal) - static_cast<std::size_t>(PdoSignal::kAnalogInput1);
+          module.analog_inputs[channel] = static_cast<std::int16_t>(sign_extend(values[i], 16));
+        }
+      }
+      module.received = true;
+      return;
+    }
+  }
+}
+
+PdoSignal CanopenIo::signal_of(const canopen::PdoMapping& mapping, std::uint8_t entry) {
+  // The loader admitted only known objects, so every entry has its signal.
+  return find_pdo_signal(mapping.entries[entry]).value_or(PdoSignal::kCount);
+}
+
+void CanopenIo::apply_drive_signal(std::size_t slot, PdoSignal signal, std::uint32_t raw,
+                                   std::int64_t now_ns) {
+  DriveRuntime& drive = drives_[slot];
+  switch (signal) {
+    case PdoSignal::kStatusword: {
+      drive.statusword = static_cast<std::uint16_t>(raw);
       const cia402::State state = cia402::decode_statusword(drive.statusword);
       if (state != drive.state) {
+        const auto previous = static_cast<std::uint8_t>(drive.state);
         drive.state = state;
-        push_event(CanopenEventKind::kDriveStateChanged, nodes_[entry.slot].id, now_ns,
-                   static_cast<std::uint32_t>(state));
+        push_event(CanopenEventKind::kDriveStateChanged, nodes_[slot].id, now_ns,
+                   static_cast<std::uint32_t>(state), previous);
       }
       drive.status_received = true;
-      const std::int32_t position = sign_extend(values[1], 32);
+      return;
+    }
+    case PdoSignal::kPositionActual: {
+      const std::int32_t position = sign_extend(raw, 32);
       if (drive.position_received) {
         // Unwrap the 32-bit counter: the difference modulo 2^32 is the travel since the
         // last TPDO (far less than 2^31 counts in one cycle).
@@ -237,29 +376,11 @@ void CanopenIo::handle_frame(const CanFrame& frame, std::int64_t now_ns) {
       drive.last_position_raw = position;
       return;
     }
-    case Route::kDriveTpdo2: {
-      std::array<std::uint32_t, 1> values{};
-      if (!canopen::unpack_pdo(frame, canopen::layout::kDriveTpdo2, values)) {
-        ++counters_.malformed_frames;
-        return;
-      }
-      drives_[entry.slot].velocity_raw = sign_extend(values[0], 32);
+    case PdoSignal::kVelocityActual:
+      drive.velocity_raw = sign_extend(raw, 32);
       return;
-    }
-    case Route::kIoTpdo1: {
-      std::array<std::uint32_t, 4> values{};
-      if (!canopen::unpack_pdo(frame, canopen::layout::kIoTpdo1, values)) {
-        ++counters_.malformed_frames;
-        return;
-      }
-      IoRuntime& module = io_[entry.slot];
-      module.digital_inputs = static_cast<std::uint8_t>(values[0]);
-      for (std::size_t i = 0; i < module.analog_inputs.size(); ++i) {
-        module.analog_inputs[i] = static_cast<std::int16_t>(sign_extend(values[1 + i], 16));
-      }
-      module.received = true;
-      return;
-    }
+    default:
+      return;  // not a drive's TPDO object: the loader refuses such mappings
   }
 }
 
@@ -337,6 +458,46 @@ void CanopenIo::fill_image(InputImage& in) const {
   in.fault_reset_request = safety_ok && (safety.digital_inputs & safety_io::kFaultResetBit) != 0;
 }
 
+void CanopenIo::send_drive_rpdo(std::size_t drive_index, std::size_t rpdo,
+                                const canopen::PdoMapping& mapping, std::uint32_t cob_id,
+                                const DriveRpdoValues& command) {
+  if (mapping.count == 0) return;
+  std::array<std::uint32_t, canopen::kMaxPdoEntries> values{};
+  fill_drive_rpdo(mapping, command, values);
+  DriveRuntime& drive = drives_[drive_index];
+  const bool cyclic = carries_cyclic_command(mapping);
+  if (!cyclic && drive.rpdo_sent[rpdo] && values == drive.rpdo_last[rpdo]) {
+    return;  // the ramps have not changed
+  }
+  if (bus_.send(canopen::pack_pdo(cob_id, mapping,
+                                  std::span<const std::uint32_t>(values.data(), mapping.count)))) {
+    drive.rpdo_last[rpdo] = values;
+    drive.rpdo_sent[rpdo] = true;
+  } else {
+    ++counters_.send_failures;  // a ramp-only PDO is retried next cycle: rpdo_sent stays behind
+  }
+}
+
+void CanopenIo::fill_drive_rpdo(const canopen::PdoMapping& mapping, const DriveRpdoValues& command,
+                                std::array<std::uint32_t, canopen::kMaxPdoEntries>& values) {
+  for (std::uint8_t i = 0; i < mapping.count; ++i) {
+    switch (signal_of(mapping, i)) {
+      case PdoSignal::kControlword:
+        values[i] = command.controlword;
+        break;
+      case PdoSignal::kTargetVelocity:
+        values[i] = command.target_velocity;
+        break;
+      case PdoSignal::kProfileAcceleration:
+      case PdoSignal::kProfileDeceleration:  // the line ramps down as it ramps up
+        values[i] = command.acceleration;
+        break;
+      default:
+        values[i] = 0;  // not a drive's RPDO object: the loader refuses such mappings
+    }
+  }
+}
+
 void CanopenIo::write(const OutputImage& out) {
   fault_reset_pressed_ =
       (io_[index(IoModuleId::kSafety)].digital_inputs & safety_io::kFaultResetBit) != 0 &&
@@ -360,36 +521,39 @@ void CanopenIo::write(const OutputImage& out) {
         command.enable && drive.state == cia402::State::kOperationEnabled
             ? velocity_to_drive_units(static_cast<DriveId>(d), command.speed_mps)
             : 0;
-    const std::array<std::uint32_t, 2> rpdo1{controlword, to_wire(target)};
-    send(canopen::pack_pdo(node.rpdo1_cob_id, canopen::layout::kDriveRpdo1, rpdo1));
-
     const std::uint32_t accel =
         acceleration_to_drive_units(static_cast<DriveId>(d), command.accel_mps2);
-    if (!drive.accel_sent || accel != drive.last_accel_sent) {
-      const std::array<std::uint32_t, 2> rpdo2{accel, accel};
-      if (bus_.send(canopen::pack_pdo(node.rpdo2_cob_id, canopen::layout::kDriveRpdo2, rpdo2))) {
-        drive.last_accel_sent = accel;
-        drive.accel_sent = true;
-      } else {
-        ++counters_.send_failures;  // retried next cycle: accel_sent stays behind
-      }
-    }
+    const DriveRpdoValues values{controlword, to_wire(target), accel};
+    send_drive_rpdo(d, 0, config_.drive_pdos.rpdo1, node.rpdo1_cob_id, values);
+    send_drive_rpdo(d, 1, config_.drive_pdos.rpdo2, node.rpdo2_cob_id, values);
   }
 
   const IoScaling& scaling = config_.io_scaling;
-  // RPDO1 of a module: the digital output byte, then analogue outputs 1 to 3.
+  // A module's outputs: the digital output byte and analogue outputs 1 to 3, placed where
+  // the configured mapping puts them.
   const auto analog = [](float value, float units_per_count) {
     return to_wire(to_analog_counts(value, units_per_count)) & 0xFFFFU;
   };
-  constexpr std::size_t kFirstAnalog = 1;
+  const auto send_outputs = [&](IoModuleId module, const IoOutputs& outputs) {
+    const canopen::PdoMapping& mapping = config_.io_pdos.rpdo1;
+    std::array<std::uint32_t, canopen::kMaxPdoEntries> values{};
+    for (std::uint8_t i = 0; i < mapping.count; ++i) {
+      const PdoSignal signal = signal_of(mapping, i);
+      values[i] = signal == PdoSignal::kDigitalOutputs
+                      ? outputs.digital
+                      : outputs.analog[static_cast<std::size_t>(signal) -
+                                       static_cast<std::size_t>(PdoSignal::kAnalogOutput1)];
+    }
+    send(canopen::pack_pdo(config_.io_modules[index(module)].rpdo1_cob_id, mapping,
+                           std::span<const std::uint32_t>(values.data(), mapping.count)));
+  };
   {
-    std::array<std::uint32_t, 4> values{};
-    values[kFirstAnalog + infeed_io::kHopperOpeningOut] =
+    IoOutputs outputs;
+    outputs.analog[infeed_io::kHopperOpeningOut] =
         analog(out.hopper_opening_mm, scaling.hopper_opening_mm_per_count);
-    values[kFirstAnalog + infeed_io::kLevellerSpeedOut] =
+    outputs.analog[infeed_io::kLevellerSpeedOut] =
         analog(out.leveller_speed_rpm, scaling.leveller_rpm_per_count);
-    send(canopen::pack_pdo(config_.io_modules[index(IoModuleId::kInfeed)].rpdo1_cob_id,
-                           canopen::layout::kIoRpdo1, values));
+    send_outputs(IoModuleId::kInfeed, outputs);
   }
   {
     std::uint8_t outputs = 0;
@@ -398,19 +562,19 @@ void CanopenIo::write(const OutputImage& out) {
     outputs |= out.centring_stroke ? stations_io::kCentringStrokeOut : 0;
     outputs |= out.squeeze_roller_down ? stations_io::kSqueezeDownOut : 0;
     outputs |= out.final_reject ? stations_io::kFinalRejectOut : 0;
-    std::array<std::uint32_t, 4> values{outputs, 0U, 0U, 0U};
-    values[kFirstAnalog + stations_io::kCentringShiftOut] =
+    IoOutputs stations;
+    stations.digital = outputs;
+    stations.analog[stations_io::kCentringShiftOut] =
         analog(out.centring_shift_mm, scaling.centring_mm_per_count);
-    send(canopen::pack_pdo(config_.io_modules[index(IoModuleId::kStations)].rpdo1_cob_id,
-                           canopen::layout::kIoRpdo1, values));
+    send_outputs(IoModuleId::kStations, stations);
   }
   {
     std::uint8_t lamps = 0;
     lamps |= out.state == LineState::kRunning ? safety_io::kRunningLampOut : 0;
     lamps |= out.state == LineState::kFault ? safety_io::kFaultLampOut : 0;
-    const std::array<std::uint32_t, 4> values{lamps, 0U, 0U, 0U};
-    send(canopen::pack_pdo(config_.io_modules[index(IoModuleId::kSafety)].rpdo1_cob_id,
-                           canopen::layout::kIoRpdo1, values));
+    IoOutputs safety;
+    safety.digital = lamps;
+    send_outputs(IoModuleId::kSafety, safety);
   }
   // SYNC last: synchronous RPDOs take effect at it, and the TPDOs it triggers carry the
   // state the next read() sees.
@@ -431,7 +595,11 @@ void CanopenIo::push_event(CanopenEventKind kind, NodeId node, std::int64_t time
     ++counters_.events_dropped;
     return;
   }
-  events_[tail % kEventCapacity] = CanopenEvent{kind, node, time_ns, code, detail};
+  // While the master itself resets, starts or stops the nodes, their boot-ups and NMT
+  // changes are what it asked for.
+  const bool commanded = nmt_commanded_ && (kind == CanopenEventKind::kBootUp ||
+                                            kind == CanopenEventKind::kNmtStateChanged);
+  events_[tail % kEventCapacity] = CanopenEvent{kind, node, time_ns, code, detail, commanded};
   event_tail_.store(tail + 1, std::memory_order_release);
 }
 
@@ -446,11 +614,12 @@ bool CanopenIo::pop_event(CanopenEvent& event) {
   return true;
 }
 
-std::size_t CanopenIo::log_events() {
+std::size_t CanopenIo::log_events(const std::function<void(const CanopenEvent&)>& observer) {
   std::size_t count = 0;
   CanopenEvent event;
   while (pop_event(event)) {
     ++count;
+    if (observer) observer(event);
     const bool bad = event.kind == CanopenEventKind::kHeartbeatLost ||
                      event.kind == CanopenEventKind::kEmergency ||
                      (event.kind == CanopenEventKind::kBusStateChanged && event.code != 0);
@@ -520,6 +689,7 @@ bool CanopenIo::write_pdo(SdoClient& sdo, NodeId node, std::uint16_t communicati
 
 bool CanopenIo::configure_drive(SdoClient& sdo, std::size_t d, std::vector<std::string>& problems) {
   const DriveNodeConfig& node = config_.drives[d];
+  const DrivePdoMappings& pdos = config_.drive_pdos;
   const NodeId id = node.node_id;
   const std::string who = "drive " + std::string(config_name(static_cast<DriveId>(d))) + " (node " +
                           std::to_string(id) + ")";
@@ -543,17 +713,17 @@ bool CanopenIo::configure_drive(SdoClient& sdo, std::size_t d, std::vector<std::
   };
   const std::uint32_t max_accel =
       acceleration_to_drive_units(static_cast<DriveId>(d), node.max_accel_mps2);
-  const bool written = write({0x1017, 0}, node.heartbeat_producer_ms, 2) &&
-                       write_pdo(sdo, id, 0x1400, 0x1600, node.rpdo1_cob_id, kSynchronous,
-                                 canopen::layout::kDriveRpdo1, problems) &&
-                       write_pdo(sdo, id, 0x1401, 0x1601, node.rpdo2_cob_id, kEventDriven,
-                                 canopen::layout::kDriveRpdo2, problems) &&
-                       write_pdo(sdo, id, 0x1800, 0x1A00, node.tpdo1_cob_id, kSynchronous,
-                                 canopen::layout::kDriveTpdo1, problems) &&
-                       write_pdo(sdo, id, 0x1801, 0x1A01, node.tpdo2_cob_id, node.tpdo2_every_syncs,
-                                 canopen::layout::kDriveTpdo2, problems) &&
-                       write({0x6060, 0}, kProfileVelocityMode, 1) &&
-                       write({0x6083, 0}, max_accel, 4) && write({0x6084, 0}, max_accel, 4);
+  const bool written =
+      write({0x1017, 0}, node.heartbeat_producer_ms, 2) &&
+      write_pdo(sdo, id, 0x1400, 0x1600, node.rpdo1_cob_id, rpdo_transmission(pdos.rpdo1),
+                pdos.rpdo1, problems) &&
+      write_pdo(sdo, id, 0x1401, 0x1601, node.rpdo2_cob_id, rpdo_transmission(pdos.rpdo2),
+                pdos.rpdo2, problems) &&
+      write_pdo(sdo, id, 0x1800, 0x1A00, node.tpdo1_cob_id, kSynchronous, pdos.tpdo1, problems) &&
+      write_pdo(sdo, id, 0x1801, 0x1A01, node.tpdo2_cob_id, node.tpdo2_every_syncs, pdos.tpdo2,
+                problems) &&
+      write({0x6060, 0}, kProfileVelocityMode, 1) && write({0x6083, 0}, max_accel, 4) &&
+      write({0x6084, 0}, max_accel, 4);
   if (!written) {
     return false;
   }
@@ -563,8 +733,15 @@ bool CanopenIo::configure_drive(SdoClient& sdo, std::size_t d, std::vector<std::
                        (mode.ok() ? std::to_string(mode.value) : mode.describe()));
     return false;
   }
-  drives_[d].last_accel_sent = max_accel;
-  drives_[d].accel_sent = true;
+  // The ramps just written by SDO are what a ramp-only RPDO would carry now.
+  const DriveRpdoValues configured{0, 0, max_accel};
+  for (std::size_t rpdo = 0; rpdo < 2; ++rpdo) {
+    const canopen::PdoMapping& mapping = rpdo == 0 ? pdos.rpdo1 : pdos.rpdo2;
+    if (!carries_cyclic_command(mapping)) {
+      fill_drive_rpdo(mapping, configured, drives_[d].rpdo_last[rpdo]);
+      drives_[d].rpdo_sent[rpdo] = true;
+    }
+  }
   return true;
 }
 
@@ -588,10 +765,10 @@ bool CanopenIo::configure_io(SdoClient& sdo, std::size_t m, std::vector<std::str
     problems.push_back(who + ": SDO write 0x1017 failed: " + heartbeat.describe());
     return false;
   }
-  return write_pdo(sdo, id, 0x1400, 0x1600, node.rpdo1_cob_id, kSynchronous,
-                   canopen::layout::kIoRpdo1, problems) &&
-         write_pdo(sdo, id, 0x1800, 0x1A00, node.tpdo1_cob_id, kSynchronous,
-                   canopen::layout::kIoTpdo1, problems);
+  return write_pdo(sdo, id, 0x1400, 0x1600, node.rpdo1_cob_id, kSynchronous, config_.io_pdos.rpdo1,
+                   problems) &&
+         write_pdo(sdo, id, 0x1800, 0x1A00, node.tpdo1_cob_id, kSynchronous, config_.io_pdos.tpdo1,
+                   problems);
 }
 
 bool CanopenIo::cycle_until(const BusClock& clock, const OutputImage& out, InputImage& in,
@@ -616,6 +793,13 @@ std::string CanopenIo::node_label(std::size_t slot) const {
 }
 
 StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
+  nmt_commanded_ = true;
+  StartupReport report = run_start_up(clock, enable_drives);
+  nmt_commanded_ = false;
+  return report;
+}
+
+StartupReport CanopenIo::run_start_up(const BusClock& clock, bool enable_drives) {
   StartupReport report;
   const std::int64_t started_ns = clock.now_ns();
   for (NodeRuntime& node : nodes_) {
@@ -739,6 +923,10 @@ StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
   }
   report.ok = configured && report.problems.empty();
   report.duration_ns = clock.now_ns() - started_ns;
+  // The SDO transfers' pauses are not the cycle's timing: measure from here.
+  take_send_confirmations();
+  bus_timing_ = CanBusTiming{};
+  last_sync_sent_ns_ = 0;
   return report;
 }
 
@@ -753,6 +941,7 @@ bool CanopenIo::shut_down(const BusClock& clock) {
     ++counters_.send_failures;
     return false;
   }
+  nmt_commanded_ = true;  // the stopped heartbeats that follow were asked for
   return disabled;
 }
 

@@ -112,6 +112,104 @@ TEST(CanConfig, BusLoadOverTheLimitIsRefused) {
   EXPECT_NE(problems.find("bus.bitrate_bps: inconsistent"), std::string::npos) << problems;
 }
 
+bool same_mapping(const canopen::PdoMapping& a, const canopen::PdoMapping& b) {
+  if (a.count != b.count) return false;
+  for (std::uint8_t i = 0; i < a.count; ++i) {
+    if (!(a.entries[i].mapping_value() == b.entries[i].mapping_value())) return false;
+  }
+  return true;
+}
+
+TEST(CanConfig, ThePdoMappingsOfTheReferenceAreTheMastersDefaults) {
+  // can.yaml spells out what the master uses without the block, so the two cannot drift.
+  const CanConfig config = test::reference_can_config();
+  EXPECT_TRUE(same_mapping(config.drive_pdos.rpdo1, canopen::layout::kDriveRpdo1));
+  EXPECT_TRUE(same_mapping(config.drive_pdos.rpdo2, canopen::layout::kDriveRpdo2));
+  EXPECT_TRUE(same_mapping(config.drive_pdos.tpdo1, canopen::layout::kDriveTpdo1));
+  EXPECT_TRUE(same_mapping(config.drive_pdos.tpdo2, canopen::layout::kDriveTpdo2));
+  EXPECT_TRUE(same_mapping(config.io_pdos.rpdo1, canopen::layout::kIoRpdo1));
+  EXPECT_TRUE(same_mapping(config.io_pdos.tpdo1, canopen::layout::kIoTpdo1));
+  const auto block = reference_text().find("pdo_mapping:");
+  ASSERT_NE(block, std::string::npos);
+  const CanConfig without = parse_can_config(reference_text().substr(0, block), "can.yaml",
+                                             test::reference_line_config());
+  EXPECT_TRUE(same_mapping(without.drive_pdos.tpdo1, config.drive_pdos.tpdo1));
+  EXPECT_TRUE(same_mapping(without.io_pdos.rpdo1, config.io_pdos.rpdo1));
+}
+
+TEST(CanConfig, ARegroupedPdoMappingLoads) {
+  std::string text = reference_text();
+  text = replaced(text, R"(rpdo1: ["0x60400010", "0x60FF0020"])",
+                  R"(rpdo1: ["0x60FF0020", "0x60400010"])");
+  text = replaced(text, R"(tpdo1: ["0x60410010", "0x60640020"])",
+                  R"(tpdo1: ["0x60640020", "0x60410010"])");
+  text = replaced(text, R"(tpdo1: ["0x60000108", "0x64010110", "0x64010210", "0x64010310"])",
+                  R"(tpdo1: ["0x64010310", "0x60000108", "0x64010110", "0x64010210"])");
+  const CanConfig config = parse_can_config(text, "can.yaml", test::reference_line_config());
+  EXPECT_EQ(config.drive_pdos.rpdo1.entries[0].index, 0x60FF);
+  EXPECT_EQ(config.drive_pdos.tpdo1.entries[1].index, 0x6041);
+  EXPECT_EQ(config.io_pdos.tpdo1.entries[0].mapping_value(), 0x64010310U);
+  EXPECT_EQ(config.io_pdos.tpdo1.count, 4);
+}
+
+TEST(CanConfig, BadPdoMappingsAreNamedWithTheirKeyAndReason) {
+  const LineConfig line = test::reference_line_config();
+  const std::string reference = reference_text();
+  const std::string drive_rpdo1 = R"(rpdo1: ["0x60400010", "0x60FF0020"])";
+  const std::string drive_tpdo2 = R"(tpdo2: ["0x606C0020"])";
+  // Not a mapping value.
+  std::string problems =
+      problems_of(replaced(reference, drive_rpdo1, R"(rpdo1: ["0x60400010", "target"])"), line);
+  EXPECT_NE(problems.find("pdo_mapping.drive.rpdo1"), std::string::npos) << problems;
+  EXPECT_NE(problems.find("expected a mapping value such as 0x60400010"), std::string::npos)
+      << problems;
+  // CiA 402's vl target velocity (0x6042, 16 bits) is not what this master commands: the
+  // problem lists what the PDO can carry.
+  problems =
+      problems_of(replaced(reference, drive_rpdo1, R"(rpdo1: ["0x60400010", "0x60420010"])"), line);
+  EXPECT_NE(problems.find("not an object this master exchanges with a drive"), std::string::npos)
+      << problems;
+  EXPECT_NE(problems.find("0x60FF0020 (target velocity)"), std::string::npos) << problems;
+  // The right object with the wrong length is no match either.
+  problems =
+      problems_of(replaced(reference, drive_rpdo1, R"(rpdo1: ["0x60400020", "0x60FF0020"])"), line);
+  EXPECT_NE(problems.find("not an object this master exchanges"), std::string::npos) << problems;
+  // The statusword comes from the drive: not in an RPDO (and then the controlword is missing).
+  problems =
+      problems_of(replaced(reference, drive_rpdo1, R"(rpdo1: ["0x60410010", "0x60FF0020"])"), line);
+  EXPECT_NE(problems.find("statusword is sent by the device: it belongs in a TPDO"),
+            std::string::npos)
+      << problems;
+  EXPECT_NE(problems.find("no PDO carries 0x60400010 (controlword)"), std::string::npos)
+      << problems;
+  // Velocity actual mapped nowhere.
+  problems = problems_of(replaced(reference, drive_tpdo2, R"(tpdo2: [])"), line);
+  EXPECT_NE(problems.find("no PDO carries 0x606C0020 (velocity actual)"), std::string::npos)
+      << problems;
+  // Mapped twice, and one PDO over 8 bytes (2 + 4 + 4).
+  problems = problems_of(replaced(reference, R"(rpdo2: ["0x60830020", "0x60840020"])",
+                                  R"(rpdo2: ["0x60400010", "0x60830020", "0x60840020"])"),
+                         line);
+  EXPECT_NE(problems.find("0x60400010 (controlword) is also mapped in rpdo1"), std::string::npos)
+      << problems;
+  EXPECT_NE(problems.find("carries 10 bytes, more than a CAN frame's 8"), std::string::npos)
+      << problems;
+  // An I/O module's object in a drive's PDO.
+  problems =
+      problems_of(replaced(reference, drive_tpdo2, R"(tpdo2: ["0x606C0020", "0x60000108"])"), line);
+  EXPECT_NE(problems.find("not an object this master exchanges with a drive"), std::string::npos)
+      << problems;
+  // Nine entries.
+  problems = problems_of(
+      replaced(reference, drive_tpdo2,
+               R"(tpdo2: ["0x606C0020", "0x606C0020", "0x606C0020", "0x606C0020", "0x606C0020",)"
+               R"( "0x606C0020", "0x606C0020", "0x606C0020", "0x606C0020"])"),
+      line);
+  EXPECT_NE(problems.find("maps 9 objects, a PDO holds at most 8"), std::string::npos) << problems;
+  // Every problem names the file and a line.
+  EXPECT_NE(problems.find("can.yaml:"), std::string::npos) << problems;
+}
+
 TEST(CanConfig, MissingFileIsAProblemNotACrash) {
   EXPECT_THROW(load_can_config("/nonexistent/can.yaml", test::reference_line_config()),
                ConfigError);

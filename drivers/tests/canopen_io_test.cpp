@@ -5,8 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "loopback_rig.hpp"
 #include "scan_thread_probe.hpp"
@@ -14,6 +19,8 @@
 namespace fl::drivers {
 namespace {
 
+using canopen::NmtState;
+using canopen::NodeId;
 using test::all_drives;
 using test::LoopbackRig;
 
@@ -73,6 +80,28 @@ TEST(CanopenIo, ShutDownDisablesTheDrivesThenStopsEveryNode) {
   for (std::size_t m = 0; m < kIoModuleCount; ++m) {
     EXPECT_EQ(rig.modules[m]->nmt_state(), canopen::NmtState::kStopped) << "module " << m;
   }
+}
+
+TEST(CanopenIo, ACleanStartAndStopRaiseNoFault) {
+  // The start-up resets and starts every node, the shut-down stops them: 16 boot-ups and 16
+  // stopped heartbeats that the master asked for, none of them a fault for the fault topic.
+  // (The NMT start shows no change: the master takes its own command as the state.)
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  for (int i = 0; i < 10; ++i) rig.scan(all_drives(true, 0.5F));
+  ASSERT_TRUE(rig.io.shut_down(rig.clock));
+  for (int i = 0; i < 10; ++i) rig.scan(OutputImage{});  // the stopped heartbeats arrive
+  std::size_t events = 0;
+  std::size_t nmt_changes = 0;
+  std::vector<std::string> faults;
+  rig.io.log_events([&](const CanopenEvent& event) {
+    ++events;
+    nmt_changes += event.kind == CanopenEventKind::kNmtStateChanged ? 1 : 0;
+    if (fault_transition(event)) faults.push_back(describe(event));
+  });
+  EXPECT_EQ(nmt_changes, kDriveCount + kIoModuleCount);  // each node's stop
+  EXPECT_GT(events, nmt_changes);                        // boot-ups and drive states too
+  EXPECT_TRUE(faults.empty()) << faults.front();
 }
 
 TEST(CanopenIo, StartUpNamesANodeThatNeverBoots) {
@@ -171,6 +200,54 @@ TEST(CanopenIo, IoModulesMapToTheProcessImage) {
   EXPECT_EQ(rig.module(IoModuleId::kInfeed).state().analog_outputs[0], 9000);
   EXPECT_EQ(rig.module(IoModuleId::kInfeed).state().analog_outputs[1], 1200);
   EXPECT_EQ(rig.module(IoModuleId::kSafety).state().digital_outputs, 0x01);  // running lamp
+}
+
+TEST(CanopenIo, ARegroupedMappingFromTheConfigReachesTheDevicesAndBack) {
+  // Every PDO's objects in another order than canopen::layout's: the master writes this
+  // mapping at start-up, and the emulated devices, which honour whatever they are given as
+  // real ones do, must still see the same commands and report the same state.
+  CanConfig config = test::reference_can_config();
+  config.drive_pdos.rpdo1 = {{{{0x60FF, 0, 32}, {0x6040, 0, 16}}}, 2};
+  config.drive_pdos.rpdo2 = {{{{0x6084, 0, 32}, {0x6083, 0, 32}}}, 2};
+  config.drive_pdos.tpdo1 = {{{{0x6064, 0, 32}, {0x6041, 0, 16}}}, 2};
+  config.io_pdos.tpdo1 = {{{{0x6401, 3, 16}, {0x6000, 1, 8}, {0x6401, 1, 16}, {0x6401, 2, 16}}}, 4};
+  config.io_pdos.rpdo1 = {{{{0x6411, 2, 16}, {0x6411, 1, 16}, {0x6200, 1, 8}, {0x6411, 3, 16}}}, 4};
+  LoopbackRig rig(config);
+  ASSERT_TRUE(rig.start(true).ok);
+  EXPECT_EQ(rig.drive(DriveId::kGuide).value(0x1600, 1), 0x60FF0020U);
+  EXPECT_EQ(rig.drive(DriveId::kGuide).value(0x1A00, 1), 0x60640020U);
+  EXPECT_EQ(rig.module(IoModuleId::kInfeed).value(0x1A00, 1), 0x64010310U);
+
+  auto& infeed = rig.module(IoModuleId::kInfeed).state();
+  infeed.digital_inputs = 0x01;               // DI0: laser barrier broken
+  infeed.analog_inputs = {6000, 4500, 1200};  // 60 mm level, 45 mm hopper, 120 rpm
+  OutputImage out = all_drives(true, 0.4F);
+  out.drives[index(DriveId::kGuide)].accel_mps2 = 2.0F;
+  out.flip_plate2_flip = true;
+  out.centring_shift_mm = 23.4F;
+  out.hopper_opening_mm = 90.0F;
+  out.leveller_speed_rpm = 120.0F;
+  for (int i = 0; i < 30; ++i) rig.scan(out);
+  rig.io.read(rig.now_ns, rig.in);
+
+  const auto& guide = rig.drive(DriveId::kGuide).state();
+  EXPECT_EQ(guide.state, cia402::State::kOperationEnabled);  // the controlword arrived
+  EXPECT_EQ(guide.target_velocity, 4000);                    // 0.4 m/s * 10000
+  EXPECT_EQ(guide.acceleration, 20000U);                     // 2 m/s^2 * 10000
+  EXPECT_TRUE(rig.in.drives[index(DriveId::kGuide)].ready);  // the statusword came back
+  EXPECT_NEAR(rig.in.drives[index(DriveId::kGuide)].speed_mps, 0.4F, 1e-4F);
+  EXPECT_EQ(rig.in.drives[index(DriveId::kGuide)].encoder_counts, guide.position_actual);
+  EXPECT_GT(guide.position_actual, 0);
+  EXPECT_TRUE(rig.in.takt_beam_broken);
+  EXPECT_NEAR(rig.in.level_mm, 60.0F, 1e-3F);
+  EXPECT_NEAR(rig.in.hopper_opening_mm, 45.0F, 1e-3F);
+  EXPECT_NEAR(rig.in.leveller_speed_rpm, 120.0F, 1e-3F);
+  const auto& stations = rig.module(IoModuleId::kStations).state();
+  EXPECT_EQ(stations.digital_outputs, 0x02);    // DO1 plate 2
+  EXPECT_EQ(stations.analog_outputs[0], 2340);  // 23.4 mm / 0.01
+  EXPECT_EQ(infeed.analog_outputs[0], 9000);
+  EXPECT_EQ(infeed.analog_outputs[1], 1200);
+  EXPECT_EQ(rig.io.counters().malformed_frames, 0U);
 }
 
 // Found by fuzz/fuzz_can_frames (corpus file regression_nan_analogue_output): a NaN in the
@@ -300,6 +377,82 @@ TEST(CanopenIo, EmergencyFaultsTheDriveUntilTheOperatorResets) {
   EXPECT_EQ(rig.io.drive_status(DriveId::kSqueeze).emcy_code, 0);
 }
 
+TEST(CanopenIo, AnEmergencyRaisesTwoFaultsAndTheResetClearsBoth) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  const OutputImage out = all_drives(true, 0.2F);
+  rig.scan(out);
+  rig.io.log_events();  // start-up's events are not under test
+  rig.drive(DriveId::kSqueeze).inject_fault(0x2310);
+  for (int i = 0; i < 3; ++i) rig.scan(out);
+  rig.module(IoModuleId::kSafety).state().digital_inputs = 0x01 | 0x08;  // fault reset
+  for (int i = 0; i < 10; ++i) rig.scan(out);
+  const NodeId squeeze = rig.config.drives[index(DriveId::kSqueeze)].node_id;
+  std::vector<std::pair<CanopenEventKind, bool>> transitions;
+  rig.io.log_events([&](const CanopenEvent& event) {
+    ASSERT_EQ(event.node, squeeze) << describe(event);  // nothing else changed
+    if (const std::optional<bool> raised = fault_transition(event)) {
+      transitions.emplace_back(event.kind, *raised);
+    }
+  });
+  // The EMCY and the drive's CiA 402 fault state are raised, in that order of arrival or the
+  // other; the reset clears both: the fault topic ends with nothing left active.
+  const auto count = [&](CanopenEventKind kind, bool raised) {
+    return std::count(transitions.begin(), transitions.end(), std::make_pair(kind, raised));
+  };
+  EXPECT_EQ(count(CanopenEventKind::kEmergency, true), 1);
+  EXPECT_EQ(count(CanopenEventKind::kDriveStateChanged, true), 1);
+  EXPECT_EQ(count(CanopenEventKind::kEmergencyCleared, false), 1);
+  EXPECT_EQ(count(CanopenEventKind::kDriveStateChanged, false), 1);
+  EXPECT_EQ(transitions.size(), 4U);
+}
+
+TEST(CanopenIo, FaultTransitionsOfStateChangesDependOnTheStateBefore) {
+  const auto event = [](CanopenEventKind kind, std::uint32_t now, std::uint8_t before) {
+    return CanopenEvent{kind, 5, 0, now, before};
+  };
+  const auto nmt = [](NmtState state) { return static_cast<std::uint8_t>(state); };
+  const auto drive = [](cia402::State state) { return static_cast<std::uint8_t>(state); };
+  const auto bus = [](CanErrorState state) { return static_cast<std::uint8_t>(state); };
+  using K = CanopenEventKind;
+  // A node leaving Operational raises, coming back clears, pre-op to stopped is neither.
+  EXPECT_EQ(fault_transition(
+                event(K::kNmtStateChanged, nmt(NmtState::kStopped), nmt(NmtState::kOperational))),
+            true);
+  EXPECT_EQ(fault_transition(event(K::kNmtStateChanged, nmt(NmtState::kOperational),
+                                   nmt(NmtState::kPreOperational))),
+            false);
+  EXPECT_EQ(fault_transition(event(K::kNmtStateChanged, nmt(NmtState::kStopped),
+                                   nmt(NmtState::kPreOperational))),
+            std::nullopt);
+  // A drive entering Fault raises once; its reaction phase then Fault is no second raise.
+  EXPECT_EQ(
+      fault_transition(event(K::kDriveStateChanged, drive(cia402::State::kFaultReactionActive),
+                             drive(cia402::State::kOperationEnabled))),
+      true);
+  EXPECT_EQ(fault_transition(event(K::kDriveStateChanged, drive(cia402::State::kFault),
+                                   drive(cia402::State::kFaultReactionActive))),
+            std::nullopt);
+  EXPECT_EQ(fault_transition(event(K::kDriveStateChanged, drive(cia402::State::kSwitchOnDisabled),
+                                   drive(cia402::State::kFault))),
+            false);
+  EXPECT_EQ(fault_transition(event(K::kDriveStateChanged, drive(cia402::State::kOperationEnabled),
+                                   drive(cia402::State::kSwitchedOn))),
+            std::nullopt);
+  // Bus off raises and the restart clears; warning and passive still communicate.
+  EXPECT_EQ(fault_transition(event(K::kBusStateChanged, bus(CanErrorState::kBusOff),
+                                   bus(CanErrorState::kErrorPassive))),
+            true);
+  EXPECT_EQ(fault_transition(event(K::kBusStateChanged, bus(CanErrorState::kErrorActive),
+                                   bus(CanErrorState::kBusOff))),
+            false);
+  EXPECT_EQ(fault_transition(event(K::kBusStateChanged, bus(CanErrorState::kErrorPassive),
+                                   bus(CanErrorState::kErrorWarning))),
+            std::nullopt);
+  EXPECT_EQ(fault_transition(event(K::kBootUp, 0, 0)), true);
+  EXPECT_EQ(fault_transition(event(K::kHeartbeatRecovered, 0, 0)), false);
+}
+
 TEST(CanopenIo, MalformedFramesAreCountedAndRefused) {
   LoopbackRig rig;
   ASSERT_TRUE(rig.start(true).ok);
@@ -372,8 +525,39 @@ TEST(CanopenIo, PositionUnwrapsAcrossTheInt32Boundary) {
   EXPECT_GT(travelled, 25000);  // about 3 s at up to 1 m/s = 10000 counts/s
 }
 
+TEST(CanopenIo, SyncPeriodsAndSendDelaysComeFromTheBusConfirmations) {
+  LoopbackRig rig;
+  rig.master_bus.set_send_confirmations(true);
+  ASSERT_TRUE(rig.start(true).ok);
+  EXPECT_EQ(rig.io.bus_timing().syncs_on_bus, 0U);  // start-up's SDO pauses are not counted
+  const OutputImage out = all_drives(true, 0.4F);
+  // Four scans 10 ms apart, one late by 3 ms, then two more on time: SYNC intervals of
+  // 10, 10, 10, 13, 10 ms on the bus (the first scan's SYNC has no predecessor).
+  const std::array<std::int64_t, 6> gaps_ns{0,          10'000'000, 10'000'000,
+                                            10'000'000, 13'000'000, 10'000'000};
+  for (const std::int64_t gap_ns : gaps_ns) {
+    rig.advance(gap_ns);
+    rig.io.read(rig.now_ns, rig.in);
+    rig.io.write(out);
+  }
+  rig.io.read(rig.now_ns, rig.in);  // collects the last SYNC's confirmation
+  const CanBusTiming& timing = rig.io.bus_timing();
+  EXPECT_EQ(timing.syncs_on_bus, 6U);
+  EXPECT_EQ(timing.sync_periods, 5U);
+  EXPECT_EQ(timing.sync_period_min_ns, 10'000'000);
+  EXPECT_EQ(timing.sync_period_max_ns, 13'000'000);
+  EXPECT_DOUBLE_EQ(timing.sync_period_mean_ns(), 10'600'000.0);  // 53 ms over 5
+  EXPECT_EQ(timing.sync_jitter_ns(LoopbackRig::kCycleNs), 3'000'000);
+  // Per scan 13 RPDO1s, 3 module RPDO1s and SYNC, plus the RPDO2s sent once after start-up;
+  // the loopback puts a frame on the bus the moment it is sent.
+  EXPECT_GE(timing.frames_confirmed, 6U * (kDriveCount + kIoModuleCount + 1));
+  EXPECT_EQ(timing.send_delay_max_ns, 0);
+  EXPECT_EQ(rig.master_bus.counters().sends_unconfirmed, 0U);
+}
+
 TEST(CanopenIo, ReadAndWriteNeitherAllocateNorLock) {
   LoopbackRig rig;
+  rig.master_bus.set_send_confirmations(true);  // the confirmation path is in the cycle too
   ASSERT_TRUE(rig.start(true).ok);
   OutputImage out = all_drives(true, 0.4F);
   rig.scan(out);

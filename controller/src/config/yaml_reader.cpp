@@ -767,6 +767,12 @@ std::vector<double> YamlMapReader::read_doubles(std::string_view key, const Rang
                                [&](const Entry& element) { return parse_double(element, range); });
 }
 
+std::vector<std::string> YamlMapReader::read_strings(std::string_view key,
+                                                     std::optional<std::size_t> expected_size) {
+  return read_sequence<std::string>(key, expected_size,
+                                    [&](const Entry& element) { return parse_string(element); });
+}
+
 void YamlMapReader::for_each_map(
     std::string_view key,
     const std::function<void(YamlMapReader& element, std::size_t index)>& read_element) {

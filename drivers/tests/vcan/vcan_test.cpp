@@ -140,6 +140,59 @@ TEST_F(Vcan, TransportSendsReceivesWithKernelTimestampsAndFilters) {
   EXPECT_EQ(receiver.error_state(), CanErrorState::kErrorActive);  // vcan has no controller
 }
 
+TEST_F(Vcan, SendConfirmationsCarryTheKernelStampOfEachOwnFrame) {
+  SocketCanOptions confirming{kInterface, {}, true, false, 0};
+  confirming.confirm_sends = true;
+  SocketCanBus sender(confirming);
+  SocketCanBus peer(SocketCanOptions{kInterface, {}, true, false, 0});
+  constexpr int kFrames = 100;
+  std::vector<std::int64_t> queued_after_ns;
+  for (int i = 0; i < kFrames; ++i) {
+    CanFrame frame = make_frame(0x181, 1);
+    frame.data[0] = static_cast<std::uint8_t>(i);
+    const std::int64_t before = now_ns();
+    ASSERT_TRUE(sender.send(frame));
+    queued_after_ns.push_back(before);
+    usleep(1000);
+  }
+  std::array<CanFrame, 128> frames{};
+  std::array<CanSendConfirmation, 128> confirmations{};
+  std::vector<CanFrame> peer_frames;
+  std::vector<CanSendConfirmation> confirmed;
+  for (int i = 0; i < 1000 && (confirmed.size() < kFrames || peer_frames.size() < kFrames); ++i) {
+    // The echoes are consumed by receive() and never returned as frames.
+    EXPECT_EQ(sender.receive(frames), 0U);
+    const std::size_t taken = sender.take_send_confirmations(confirmations);
+    confirmed.insert(confirmed.end(), confirmations.begin(),
+                     confirmations.begin() + static_cast<std::ptrdiff_t>(taken));
+    const std::size_t count = peer.receive(frames);
+    peer_frames.insert(peer_frames.end(), frames.begin(),
+                       frames.begin() + static_cast<std::ptrdiff_t>(count));
+    usleep(1000);
+  }
+  ASSERT_EQ(confirmed.size(), static_cast<std::size_t>(kFrames));
+  ASSERT_EQ(peer_frames.size(), static_cast<std::size_t>(kFrames));
+  EXPECT_EQ(sender.counters().sends_confirmed, static_cast<std::uint64_t>(kFrames));
+  EXPECT_EQ(sender.counters().frames_received, 0U);
+  // Kernel stamps are CLOCK_REALTIME converted with an offset taken from two clock reads per
+  // receive() call; 1 ms covers that offset's error even when the emulated CPU stalls.
+  constexpr std::int64_t kClockOffsetToleranceNs = 1'000'000;
+  std::int64_t max_delay_ns = 0;
+  for (std::size_t i = 0; i < confirmed.size(); ++i) {
+    EXPECT_EQ(peer_frames[i].data[0], i);  // both in send order
+    EXPECT_GE(confirmed[i].queued_ns, queued_after_ns[i]);
+    EXPECT_GE(confirmed[i].sent_ns, confirmed[i].queued_ns - kClockOffsetToleranceNs);
+    // vcan hands one frame to every socket from one kernel buffer, stamped once: the peer's
+    // receive stamp is the sender's send stamp.
+    EXPECT_NEAR(static_cast<double>(peer_frames[i].timestamp_ns),
+                static_cast<double>(confirmed[i].sent_ns),
+                static_cast<double>(kClockOffsetToleranceNs));
+    max_delay_ns = std::max(max_delay_ns, confirmed[i].sent_ns - confirmed[i].queued_ns);
+  }
+  std::printf("VCAN: %d send confirmations, send() to kernel stamp max %.1f us\n", kFrames,
+              static_cast<double>(max_delay_ns) / 1e3);
+}
+
 TEST_F(Vcan, FullReceiveQueueIsCountedNotBlocking) {
   SocketCanBus sender(SocketCanOptions{kInterface, {}, true, false, 0});
   // The smallest receive buffer the kernel allows holds a few dozen frames.
@@ -170,13 +223,16 @@ TEST_F(Vcan, MasterStartsEmulatedLineCommandsItAndDetectsALostNode) {
   test::Candump candump;
   const CanConfig config = embedded_config();
   DeviceThread devices(config);
-  SocketCanBus bus(SocketCanOptions{kInterface, {}, true, false, 1 << 20});
+  SocketCanOptions options{kInterface, {}, true, false, 1 << 20};
+  options.confirm_sends = true;  // as linectl control --can runs it
+  SocketCanBus bus(options);
   CanopenIo io(bus, config);
   const StartupReport report = io.start_up(monotonic_bus_clock(), true);
   ASSERT_TRUE(report.ok) << (report.problems.empty() ? "" : report.problems.front());
   std::printf("VCAN: start-up (reset, %zu nodes configured by SDO, enable) took %.1f ms\n",
               kDriveCount + kIoModuleCount, static_cast<double>(report.duration_ns) / 1e6);
 
+  const std::uint64_t syncs_before_scans = io.counters().syncs_sent;
   OutputImage out{};
   out.state = LineState::kRunning;
   for (DriveCommand& command : out.drives) {
@@ -253,6 +309,18 @@ TEST_F(Vcan, MasterStartsEmulatedLineCommandsItAndDetectsALostNode) {
   EXPECT_TRUE(in.drives[index(DriveId::kTakt)].ready);
   EXPECT_EQ(io.counters().malformed_frames, 0U);
   io.log_events();
+  // Every SYNC the scans sent came back stamped (vcan echoes each frame it is given).
+  const CanBusTiming& timing = io.bus_timing();
+  EXPECT_EQ(timing.syncs_on_bus, io.counters().syncs_sent - syncs_before_scans);
+  EXPECT_EQ(bus.counters().sends_unconfirmed, 0U);
+  std::printf(
+      "VCAN: SYNC on the bus over %llu intervals: mean %.3f ms, min %.3f ms, max %.3f ms; "
+      "send() to kernel stamp mean %.1f us, max %.1f us over %llu frames\n",
+      static_cast<unsigned long long>(timing.sync_periods), timing.sync_period_mean_ns() / 1e6,
+      static_cast<double>(timing.sync_period_min_ns) / 1e6,
+      static_cast<double>(timing.sync_period_max_ns) / 1e6, timing.send_delay_mean_ns() / 1e3,
+      static_cast<double>(timing.send_delay_max_ns) / 1e3,
+      static_cast<unsigned long long>(timing.frames_confirmed));
 
   if (candump.running()) {
     const std::vector<std::string> lines = candump.finish();
@@ -271,7 +339,9 @@ TEST_F(Vcan, MasterStartsEmulatedLineCommandsItAndDetectsALostNode) {
 TEST_F(Vcan, SyncToTpdoRoundTrip) {
   const CanConfig config = embedded_config();
   DeviceThread devices(config);
-  SocketCanBus bus(SocketCanOptions{kInterface, {}, true, false, 1 << 20});
+  SocketCanOptions options{kInterface, {}, true, false, 1 << 20};
+  options.confirm_sends = true;  // the SYNC's own kernel stamp starts the kernel round trip
+  SocketCanBus bus(options);
   CanopenIo io(bus, config);
   ASSERT_TRUE(io.start_up(monotonic_bus_clock(), false).ok);
   std::array<CanFrame, 64> frames{};
@@ -281,7 +351,11 @@ TEST_F(Vcan, SyncToTpdoRoundTrip) {
   constexpr std::size_t kAnswersPerSync = kDriveCount * 2 + kIoModuleCount;
   const std::uint32_t first_id = config.drives[0].tpdo1_cob_id;
   std::vector<double> first_us;
+  std::vector<double> first_kernel_us;  // SYNC's send stamp to the first TPDO's receive stamp
   std::vector<double> all_us;
+  std::array<CanSendConfirmation, 64> confirmations{};
+  while (bus.take_send_confirmations(confirmations) > 0) {
+  }
   constexpr int kRounds = 500;
   // Every answer is waited for: a round cut short by a stalled guest would leave its late
   // answers to be counted in the next one.
@@ -291,6 +365,7 @@ TEST_F(Vcan, SyncToTpdoRoundTrip) {
     ASSERT_TRUE(bus.send(canopen::make_sync()));
     std::size_t answers = 0;
     bool first_seen = false;
+    std::int64_t first_stamp_ns = 0;
     while (answers < kAnswersPerSync && now_ns() - sent < kRoundWindowNs) {
       const std::size_t count = bus.receive(frames);
       for (std::size_t i = 0; i < count; ++i) {
@@ -299,10 +374,15 @@ TEST_F(Vcan, SyncToTpdoRoundTrip) {
           if (frames[i].id == first_id && !first_seen) {
             first_seen = true;
             first_us.push_back(static_cast<double>(frames[i].timestamp_ns - sent) / 1e3);
+            first_stamp_ns = frames[i].timestamp_ns;
           }
         }
       }
     }
+    // The SYNC's echo was read with the answers; it is this round's only confirmation.
+    ASSERT_EQ(bus.take_send_confirmations(confirmations), 1U);
+    ASSERT_EQ(confirmations[0].id, canopen::kSyncCobId);
+    first_kernel_us.push_back(static_cast<double>(first_stamp_ns - confirmations[0].sent_ns) / 1e3);
     all_us.push_back(static_cast<double>(now_ns() - sent) / 1e3);
     usleep(2000);  // let heartbeats through; not a load test
   }
@@ -316,6 +396,11 @@ TEST_F(Vcan, SyncToTpdoRoundTrip) {
       "p99 %.1f us max %.1f us; all %zu TPDOs p50 %.1f us p99 %.1f us max %.1f us\n",
       kRounds, percentile(first_us, 0.5), percentile(first_us, 0.99), percentile(first_us, 1.0),
       kAnswersPerSync, percentile(all_us, 0.5), percentile(all_us, 0.99), percentile(all_us, 1.0));
+  std::printf(
+      "VCAN: SYNC kernel tx stamp -> first TPDO kernel rx stamp: p50 %.1f us p99 %.1f us max "
+      "%.1f us\n",
+      percentile(first_kernel_us, 0.5), percentile(first_kernel_us, 0.99),
+      percentile(first_kernel_us, 1.0));
   // Far inside one 10 ms cycle even under TCG emulation.
   EXPECT_LT(percentile(all_us, 0.5), 5000.0);
 }

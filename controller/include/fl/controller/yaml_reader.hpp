@@ -230,6 +230,8 @@ class YamlMapReader {
                                  std::optional<std::size_t> expected_size = std::nullopt);
   std::vector<double> read_doubles(std::string_view key, const Range& range,
                                    std::optional<std::size_t> expected_size = std::nullopt);
+  std::vector<std::string> read_strings(std::string_view key,
+                                        std::optional<std::size_t> expected_size = std::nullopt);
   // Calls `read_element` for each mapping of a sequence of mappings; each element reader is
   // finished after the call.
   void for_each_map(

@@ -8,6 +8,8 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -64,6 +66,53 @@ struct IoScaling {
   float centring_mm_per_count = 0.0F;
 };
 
+// The process data this master exchanges, whichever PDO carries it (config/can.yaml
+// pdo_mapping). Drives: CiA 402 profile velocity mode; I/O modules: CiA 401.
+enum class PdoSignal : std::uint8_t {
+  kControlword,          // 0x6040, master -> drive
+  kTargetVelocity,       // 0x60FF
+  kProfileAcceleration,  // 0x6083
+  kProfileDeceleration,  // 0x6084
+  kStatusword,           // 0x6041, drive -> master
+  kPositionActual,       // 0x6064
+  kVelocityActual,       // 0x606C
+  kDigitalOutputs,       // 0x6200:01, master -> module
+  kAnalogOutput1,        // 0x6411:01..03
+  kAnalogOutput2,
+  kAnalogOutput3,
+  kDigitalInputs,  // 0x6000:01, module -> master
+  kAnalogInput1,   // 0x6401:01..03
+  kAnalogInput2,
+  kAnalogInput3,
+  kCount
+};
+struct PdoSignalInfo {
+  PdoSignal signal;
+  canopen::PdoEntry object;  // index, sub-index and length in bits, as the device has it
+  bool drive;                // a drive's object (else an I/O module's)
+  bool to_device;            // carried by an RPDO (else by a TPDO)
+  std::string_view name;
+};
+// Every signal, in PdoSignal order.
+std::span<const PdoSignalInfo> pdo_signals();
+const PdoSignalInfo& info(PdoSignal signal);
+// The signal a mapping entry carries: the same index, sub-index and length; nullopt if none.
+std::optional<PdoSignal> find_pdo_signal(const canopen::PdoEntry& entry);
+
+// The PDO mappings the start-up writes, shared by every drive and every module. Defaults:
+// canopen::layout. An RPDO that carries the controlword or target velocity is synchronous
+// and goes every cycle; one with only the ramps goes when they change.
+struct DrivePdoMappings {
+  canopen::PdoMapping rpdo1 = canopen::layout::kDriveRpdo1;
+  canopen::PdoMapping rpdo2 = canopen::layout::kDriveRpdo2;
+  canopen::PdoMapping tpdo1 = canopen::layout::kDriveTpdo1;  // every SYNC
+  canopen::PdoMapping tpdo2 = canopen::layout::kDriveTpdo2;  // every tpdo2_every_syncs SYNCs
+};
+struct IoPdoMappings {
+  canopen::PdoMapping rpdo1 = canopen::layout::kIoRpdo1;  // every cycle
+  canopen::PdoMapping tpdo1 = canopen::layout::kIoTpdo1;  // every SYNC
+};
+
 struct CanConfig {
   std::string interface_name;
   std::uint32_t bitrate_bps = 0;     // set by the OS (ip link), used here for the bus load check
@@ -75,6 +124,8 @@ struct CanConfig {
   std::array<DriveNodeConfig, kDriveCount> drives{};
   std::array<IoModuleConfig, kIoModuleCount> io_modules{};
   IoScaling io_scaling;
+  DrivePdoMappings drive_pdos;
+  IoPdoMappings io_pdos;
 };
 
 // Throws fl::ConfigError listing every problem.
@@ -84,5 +135,8 @@ CanConfig parse_can_config(std::string_view yaml_text, std::string_view source_n
 
 // Worst-case share of the bitrate used by one cycle's traffic (SYNC, PDOs, heartbeats).
 double estimate_bus_load(const CanConfig& config);
+// Whether an RPDO goes every cycle (it carries a drive's controlword or target velocity, or a
+// module's outputs) rather than on change (only the ramps).
+bool carries_cyclic_command(const canopen::PdoMapping& mapping);
 
 }  // namespace fl::drivers

@@ -25,6 +25,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,10 +55,16 @@ struct CanopenEvent {
   canopen::NodeId node = 0;
   std::int64_t time_ns = 0;
   std::uint32_t code = 0;   // EMCY error code, NMT state, CiA 402 state or bus error state
-  std::uint8_t detail = 0;  // EMCY error register
+  std::uint8_t detail = 0;  // EMCY error register; for a state change the state before
+  bool commanded = false;   // a boot-up or NMT change the master's own start-up or stop caused
 };
 // "node 3: EMCY 0x2310 continuous over current (register 0x03)"
 std::string describe(const CanopenEvent& event);
+// Whether the event raises a fault (true), clears one (false) or neither (nullopt): a lost
+// heartbeat, an EMCY, a reboot, a node leaving Operational, a drive entering Fault and the
+// bus going off raise; their counterparts clear (a reboot only by the next start-up). What
+// the master commanded (the start-up's resets, the stop at shut-down) is neither.
+std::optional<bool> fault_transition(const CanopenEvent& event);
 
 struct CanopenCounters {
   std::uint64_t frames_handled = 0;
@@ -68,6 +75,26 @@ struct CanopenCounters {
   std::uint64_t send_failures = 0;     // RPDO or SYNC not queued
   std::uint64_t syncs_sent = 0;
   std::uint64_t heartbeats_lost = 0;  // nodes that passed their heartbeat timeout (each time)
+};
+
+// Bus timing the master measures from the transport's send confirmations (all zero when the
+// transport has none): how regular SYNC is on the wire, and how long a frame waits between
+// send() and the bus. Counted from the end of start_up().
+struct CanBusTiming {
+  std::uint64_t syncs_on_bus = 0;
+  std::uint64_t sync_periods = 0;  // intervals between consecutive SYNCs on the bus
+  std::int64_t sync_period_min_ns = 0;
+  std::int64_t sync_period_max_ns = 0;
+  std::int64_t sync_period_sum_ns = 0;
+  std::uint64_t frames_confirmed = 0;
+  std::int64_t send_delay_max_ns = 0;  // send() to on the bus, over every confirmed frame
+  std::int64_t send_delay_sum_ns = 0;
+
+  [[nodiscard]] double sync_period_mean_ns() const;
+  // The largest deviation of a SYNC interval from `cycle_period_ns`: the SYNC jitter a
+  // drive synchronised to it sees.
+  [[nodiscard]] std::int64_t sync_jitter_ns(std::int64_t cycle_period_ns) const;
+  [[nodiscard]] double send_delay_mean_ns() const;
 };
 
 // What a node looks like to the master now.
@@ -106,13 +133,15 @@ class CanopenIo final : public ProcessIo {
 
   // Any one thread other than the scan thread (single consumer).
   bool pop_event(CanopenEvent& event);
-  // Pops every pending event and logs it with spdlog; returns how many.
-  std::size_t log_events();
+  // Pops every pending event and logs it with spdlog, handing each to `observer` too (the
+  // fault topic); returns how many.
+  std::size_t log_events(const std::function<void(const CanopenEvent&)>& observer = {});
 
   // Read these while the cycle is not running (plain fields written by the scan thread).
   [[nodiscard]] NodeStatus drive_status(DriveId drive) const;
   [[nodiscard]] NodeStatus io_status(IoModuleId module) const;
   [[nodiscard]] const CanopenCounters& counters() const { return counters_; }
+  [[nodiscard]] const CanBusTiming& bus_timing() const { return bus_timing_; }
   [[nodiscard]] const CanConfig& config() const { return config_; }
 
   // Scaling, exposed for tests and tools.
@@ -158,8 +187,20 @@ class CanopenIo final : public ProcessIo {
     bool position_received = false;
     std::int64_t encoder_counts = 0;  // unwrapped from the 32-bit position actual
     std::int32_t velocity_raw = 0;
-    std::uint32_t last_accel_sent = 0;
-    bool accel_sent = false;
+    // What each RPDO last carried: a ramp-only RPDO goes again only when this changes.
+    std::array<std::array<std::uint32_t, canopen::kMaxPdoEntries>, 2> rpdo_last{};
+    std::array<bool, 2> rpdo_sent{};
+  };
+  // A drive's RPDO objects for one cycle, raw as on the wire.
+  struct DriveRpdoValues {
+    std::uint32_t controlword = 0;
+    std::uint32_t target_velocity = 0;
+    std::uint32_t acceleration = 0;  // also the deceleration
+  };
+  // A module's outputs for one cycle, raw as on the wire.
+  struct IoOutputs {
+    std::uint32_t digital = 0;
+    std::array<std::uint32_t, 3> analog{};
   };
   struct IoRuntime {
     std::uint8_t digital_inputs = 0;
@@ -170,6 +211,16 @@ class CanopenIo final : public ProcessIo {
   void build_routes();
   void handle_frame(const CanFrame& frame, std::int64_t now_ns);
   void check_timeouts(std::int64_t now_ns);
+  void take_send_confirmations();
+  static PdoSignal signal_of(const canopen::PdoMapping& mapping, std::uint8_t entry);
+  void apply_drive_signal(std::size_t slot, PdoSignal signal, std::uint32_t raw,
+                          std::int64_t now_ns);
+  static void fill_drive_rpdo(const canopen::PdoMapping& mapping, const DriveRpdoValues& command,
+                              std::array<std::uint32_t, canopen::kMaxPdoEntries>& values);
+  void send_drive_rpdo(std::size_t drive_index, std::size_t rpdo,
+                       const canopen::PdoMapping& mapping, std::uint32_t cob_id,
+                       const DriveRpdoValues& command);
+  StartupReport run_start_up(const BusClock& clock, bool enable_drives);
   // Outside the cycle: write `out`, a cycle period, read into `in`, until done() or
   // enable_timeout_ms passed; whether done() came true.
   bool cycle_until(const BusClock& clock, const OutputImage& out, InputImage& in,
@@ -194,9 +245,13 @@ class CanopenIo final : public ProcessIo {
   std::array<DriveRuntime, kDriveCount> drives_{};
   std::array<IoRuntime, kIoModuleCount> io_{};
   std::array<CanFrame, kReceiveBatch> receive_buffer_{};
+  std::array<CanSendConfirmation, kReceiveBatch> confirmation_buffer_{};
+  std::int64_t last_sync_sent_ns_ = 0;  // 0: no SYNC confirmed yet
+  CanBusTiming bus_timing_;
   std::int64_t now_ns_ = 0;
   bool fault_reset_pressed_ = false;
   bool reset_phase_ = false;
+  bool nmt_commanded_ = false;  // start-up running, or the nodes stopped by shut_down()
   CanErrorState bus_state_ = CanErrorState::kErrorActive;
   CanopenCounters counters_;
 
