@@ -3,6 +3,7 @@
 // controller's ledger and the plant's ground truth balance.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <filesystem>
 
 #include "fl/apps/closed_loop.hpp"
@@ -178,29 +179,63 @@ TEST(FaultScenarios, EstopStopsTheLineAndItRestartsAfterAcknowledge) {
   EXPECT_GT(kpis.placed_per_minute, 40.0);  // it did restart
 }
 
-// A drive trips at 60 s: the line faults; it stays down (the drive stays faulted), and
-// the run's drain closes what is left as lost with a reason rather than dropping it.
-TEST(FaultScenarios, DriveTripStopsTheLineAndNothingVanishes) {
+// A drive trips at 60 s: the line faults. The tripped section and everything upstream of it
+// stop in the same scan; the belts downstream run on until the fillets on them have left the
+// line, so those are finished rather than stranded. The line stays down (the drive stays
+// faulted), and the run's drain closes what is left upstream as lost with a reason rather
+// than dropping it.
+TEST(FaultScenarios, DriveTripStopsItsSectionAndUpstreamWhileDownstreamDrains) {
   Scenario scenario;
-  scenario.options.before_scan = [&](std::int64_t time_ns, LineController&) {
-    scenario.plant.faults().drive_fault[index(DriveId::kMultilane2Right)] = time_ns >= 60 * kSecond;
+  constexpr DriveId kTripped = DriveId::kMultilane2Right;
+  constexpr std::int64_t kTripNs = 60 * kSecond;
+  std::uint64_t placed_at_trip = 0;
+  std::uint64_t placed_at_end = 0;
+  scenario.options.before_scan = [&](std::int64_t time_ns, LineController& controller) {
+    scenario.plant.faults().drive_fault[index(kTripped)] = time_ns >= kTripNs;
+    const std::uint64_t placed =
+        controller.counters().outcomes[static_cast<std::size_t>(Outcome::kPlaced)];
+    if (time_ns < kTripNs) placed_at_trip = placed;
+    placed_at_end = placed;
   };
   scenario.options.drain_timeout_s = 5.0;
-  // Every scan that reads a drive fault stops every belt in that scan.
+  // The tripped unit (multilane 2, both drives) and every drive upstream of it: bulk to
+  // multilane 1 come first in DriveId's flow order.
+  const auto stops_with_the_trip = [](std::size_t d) {
+    return d <= index(DriveId::kMultilane2Right);
+  };
   ScanReaction reaction;
+  std::uint64_t draining_scans = 0;  // faulted, downstream belts still moving
+  OutputImage last_out{};
   scenario.options.after_update = [&](const InputImage& in, const OutputImage& out) {
-    reaction.check(any_drive_fault(in), out.state == LineState::kFault && all_drives_at_rest(out));
+    bool upstream_at_rest = true;
+    for (std::size_t d = 0; d < kDriveCount; ++d) {
+      if (stops_with_the_trip(d) && out.drives[d].speed_mps != 0.0F) upstream_at_rest = false;
+    }
+    reaction.check(any_drive_fault(in), out.state == LineState::kFault && upstream_at_rest);
+    if (out.state == LineState::kFault && !all_drives_at_rest(out)) ++draining_scans;
+    last_out = out;
   };
   const apps::Kpis kpis = scenario.run();
   SCOPED_TRACE(apps::format_kpis(kpis));
   EXPECT_GT(reaction.cause_scans, 0U);
   EXPECT_EQ(reaction.missed_scans, 0U);
   EXPECT_NE(kpis.faults_seen & fault_bit(FaultCode::kDriveFault), 0U);
+  // The squeeze roller and outfeed belts carried their fillets off: placed after the trip.
+  EXPECT_GT(draining_scans, 0U);
+  EXPECT_GT(placed_at_end, placed_at_trip);
+  // The drain ended: every belt stands at the end, faulted.
+  EXPECT_EQ(last_out.state, LineState::kFault);
+  EXPECT_TRUE(all_drives_at_rest(last_out));
   EXPECT_TRUE(kpis.truth_balanced);
   EXPECT_TRUE(kpis.ledger_balanced);
-  EXPECT_GT(kpis.truth.on_line_at_end, 0U);  // the stopped belts still carry fillets
+  EXPECT_GT(kpis.truth.on_line_at_end, 0U);  // the stopped belts upstream still carry fillets
   EXPECT_GT(kpis.outcomes[static_cast<std::size_t>(Outcome::kLost)], 0U);  // closed as run ended
   EXPECT_EQ(kpis.truth.outfeed_not_singulated, 0U);
+  std::printf(
+      "drive trip: %llu placed after it, %llu scans of drain, %llu lost at the end\n",
+      static_cast<unsigned long long>(placed_at_end - placed_at_trip),
+      static_cast<unsigned long long>(draining_scans),
+      static_cast<unsigned long long>(kpis.outcomes[static_cast<std::size_t>(Outcome::kLost)]));
 }
 
 }  // namespace

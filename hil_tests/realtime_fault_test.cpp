@@ -27,18 +27,24 @@ constexpr std::int64_t kPeriodNs = 10'000'000;  // line.yaml's scan period
 constexpr std::int64_t kMs = 1'000'000;
 
 // The line's logic, with a check of each scan's images on the scan thread: scans that read
-// a drive fault, and those among them that did not stop every belt in the same scan.
+// a drive fault, and those among them that did not stop, in the same scan, the faulted
+// drive and every drive upstream of it (lower in DriveId's flow order; belts downstream may
+// run on to carry their fillets off).
 class CheckedLogic final : public ScanLogic {
  public:
   explicit CheckedLogic(LineControllerLogic& logic) : logic_(logic) {}
   void update(const InputImage& in, OutputImage& out) override {
     logic_.update(in, out);
-    bool fault = false;
-    for (const DriveFeedback& drive : in.drives) fault = fault || drive.fault;
-    if (!fault) return;
+    std::size_t last_faulted = kDriveCount;
+    for (std::size_t d = 0; d < kDriveCount; ++d) {
+      if (in.drives[d].fault) last_faulted = d;
+    }
+    if (last_faulted == kDriveCount) return;
     fault_scans_.fetch_add(1, std::memory_order_relaxed);
     bool at_rest = out.state == LineState::kFault;
-    for (const DriveCommand& drive : out.drives) at_rest = at_rest && drive.speed_mps == 0.0F;
+    for (std::size_t d = 0; d <= last_faulted; ++d) {
+      at_rest = at_rest && out.drives[d].speed_mps == 0.0F;
+    }
     if (!at_rest) missed_scans_.fetch_add(1, std::memory_order_relaxed);
   }
   void on_overrun(const OverrunInfo& info) override { logic_.on_overrun(info); }

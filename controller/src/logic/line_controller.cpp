@@ -1,6 +1,7 @@
 #include "fl/controller/line_controller.hpp"
 
 #include <algorithm>
+#include <limits>
 
 #include "stations.hpp"
 #include "tracker.hpp"
@@ -19,7 +20,10 @@ constexpr float kStopDrainTimeoutS = 30.0F;
 // A camera that has delivered is silent after this many of its frame periods without a
 // frame (and never sooner than its max age).
 constexpr float kSilentPeriods = 5.0F;
+// Sections meet end to start; float positions from YAML may differ by rounding.
+constexpr float kSectionJoinToleranceMm = 1.0F;
 // Faults that stop the whole line; the others degrade it (their reactions reject items).
+// A drive fault stops its own section and those upstream at once; see drain_downstream().
 constexpr std::uint32_t kLineStoppingFaults =
     fault_bit(FaultCode::kEstop) | fault_bit(FaultCode::kDriveFault) |
     fault_bit(FaultCode::kTrackerOverflow) | fault_bit(FaultCode::kCycleOverrun);
@@ -51,6 +55,8 @@ struct LineController::Impl {
     faults = 0;
     latched_faults = 0;
     state_time_s = 0.0F;
+    drain_from_mm = -std::numeric_limits<float>::infinity();
+    drain_over = false;
     last_time_ns = 0;
     first_scan = true;
     start_requested = stop_requested = ack_requested = false;
@@ -133,6 +139,8 @@ struct LineController::Impl {
       if (in.drives[d].fault || enabled_and_not_ready) {
         if (!drive_fault) faulted_drive = static_cast<std::uint8_t>(d);
         drive_fault = true;
+        // The product path from the most downstream faulted section's end on may drain.
+        drain_from_mm = std::max(drain_from_mm, section_end_mm(static_cast<DriveId>(d)));
       }
     }
     set_fault(FaultCode::kDriveFault, drive_fault, in.time_ns, faulted_drive);
@@ -147,8 +155,9 @@ struct LineController::Impl {
     // The overload contact acts in this scan; a jam seen from the blade speed in the next.
     if (in.leveller_overload) set_fault(FaultCode::kLevellerOverload, true, in.time_ns, 0);
 
+    const bool draining = drain_downstream(in);
     const bool running = state == LineState::kStarting || state == LineState::kRunning ||
-                         state == LineState::kStopping;
+                         state == LineState::kStopping || draining;
     // The infeed stays off after a leveller fault until the operator acknowledges it.
     const bool infeed = state == LineState::kRunning &&
                         ((faults | latched_faults) & fault_bit(FaultCode::kLevellerOverload)) == 0;
@@ -186,10 +195,61 @@ struct LineController::Impl {
       out.leveller_speed_rpm = 0.0F;
       out.squeeze_roller_down = false;
       out.centring_stroke = false;
+    } else if (draining) {
+      // The faulted section and everything upstream of it stand (held, enabled); the
+      // stations downstream work on as in a run.
+      for (std::size_t d = 0; d < kDriveCount; ++d) {
+        if (!downstream_of_drain(static_cast<DriveId>(d))) {
+          out.drives[d].speed_mps = 0.0F;
+          out.drives[d].enable = in.estop_ok;
+        }
+      }
+      out.leveller_speed_rpm = 0.0F;
     }
     out.state = state;
     out.active_faults = faults | latched_faults;
     refresh_counters();
+  }
+
+  // Where a drive's part of the product path ends: the bulk belt feeds s = 0, and a
+  // multilane unit's right drive shares its left drive's section.
+  float section_end_mm(DriveId drive) const {
+    if (drive == DriveId::kBulk) return 0.0F;
+    if (drive == DriveId::kMultilane1Right) drive = DriveId::kMultilane1Left;
+    if (drive == DriveId::kMultilane2Right) drive = DriveId::kMultilane2Left;
+    return config.sections[index(drive)].end_mm;
+  }
+  float section_start_mm(DriveId drive) const {
+    if (drive == DriveId::kBulk) return -std::numeric_limits<float>::infinity();
+    if (drive == DriveId::kMultilane1Right) drive = DriveId::kMultilane1Left;
+    if (drive == DriveId::kMultilane2Right) drive = DriveId::kMultilane2Left;
+    return config.sections[index(drive)].start_mm;
+  }
+  bool downstream_of_drain(DriveId drive) const {
+    return section_start_mm(drive) >= drain_from_mm - kSectionJoinToleranceMm;
+  }
+
+  // A drive fault, and nothing else that stops the line, with the safety chain closed: the
+  // belts downstream of the faulted section run on until the fillets on them have left the
+  // line (placed or rejected as in a run, not stranded), within the stop drain time. Once
+  // over, the drain stays over until the fault is acknowledged.
+  bool drain_downstream(const InputImage& in) {
+    if (state != LineState::kFault) {
+      drain_over = false;
+      drain_from_mm = -std::numeric_limits<float>::infinity();
+      return false;
+    }
+    const std::uint32_t stopping = (faults | latched_faults) & kLineStoppingFaults;
+    if (drain_over || stopping != fault_bit(FaultCode::kDriveFault) || !in.estop_ok ||
+        state_time_s > kStopDrainTimeoutS) {
+      drain_over = true;
+      return false;
+    }
+    for (const Item& item : tracker.items()) {
+      if (item.active && item.s_mm >= drain_from_mm) return true;
+    }
+    drain_over = true;
+    return false;
   }
 
   void refresh_counters() {
@@ -282,6 +342,10 @@ struct LineController::Impl {
   std::array<bool, kCameraCount> camera_flooded{};  // the camera's newest frame was flooded
   std::int32_t consecutive_overruns = 0;
   float state_time_s = 0.0F;
+  // The drain after a drive fault: where it starts on the product path (the end of the most
+  // downstream faulted section), and whether it has ended.
+  float drain_from_mm = -std::numeric_limits<float>::infinity();
+  bool drain_over = false;
   std::int64_t last_time_ns = 0;
   bool first_scan = true;
   bool start_requested = false;

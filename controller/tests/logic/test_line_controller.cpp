@@ -69,6 +69,9 @@ TEST_F(LineControllerTest, EstopDisablesEveryDriveInTheSameScan) {
   EXPECT_EQ(controller.active_faults(), 0U);
 }
 
+// No fillet is on the line, so nothing downstream of the tripped reject belt has to drain:
+// every belt stops in the scan that reads the fault. (With fillets downstream those belts run
+// on until they are clear: closed_loop_tests FaultScenarios.DriveTrip*.)
 TEST_F(LineControllerTest, DriveFaultStopsTheLine) {
   controller.request_start();
   scans(3);
