@@ -165,6 +165,9 @@ void check_instance(const FilletInstance& fillet, int shape_variants) {
       !std::isfinite(fillet.angle_rad)) {
     throw std::invalid_argument("FilletRenderer: fillet with an invalid size, scale, hand or side");
   }
+  if (!(fillet.lift_mm >= 0.0) || !(fillet.lift_mm < 200.0)) {
+    throw std::invalid_argument("FilletRenderer: lift_mm must be in [0, 200) mm");
+  }
 }
 
 // Deterministic per-cell hash in [-1, 1]: belt grain that moves with the belt.
@@ -404,9 +407,10 @@ RenderedFrame FilletRenderer::render(const RenderCamera& camera, const Scene& sc
           const cv::Vec3d b = image_to_belt * cv::Vec3d(pu, pv, 1.0);
           const cv::Point2d belt_mm(b[0] / b[2], b[1] / b[2]);
           const cv::Vec3d belt = belt_colour_at(scene.belt, belt_mm, scene.seed);
-          // The highest fillet surface over this point is the one seen.
+          // The highest fillet surface over this point is the one seen: its own thickness
+          // plus its lift where it lies on another. Shading uses the thickness.
           const PreparedFillet* top = nullptr;
-          double top_height = 0.0, top_u = 0.0, top_v = 0.0;
+          double top_surface = 0.0, top_height = 0.0, top_u = 0.0, top_v = 0.0;
           for (const auto& p : prepared) {
             const double dx = belt_mm.x - p.instance.x_mm;
             const double dy = belt_mm.y - p.instance.y_mm;
@@ -414,7 +418,9 @@ RenderedFrame FilletRenderer::render(const RenderCamera& camera, const Scene& sc
             const double u = (p.cos_a * dx + p.sin_a * dy) / p.instance.scale;
             const double v = (-p.sin_a * dx + p.cos_a * dy) / p.instance.scale;
             const double h = sample_height(*p.sprite, u, v) * p.instance.scale;
-            if (h > top_height) {
+            const double surface = h > 0.0 ? h + p.instance.lift_mm : 0.0;
+            if (surface > top_surface) {
+              top_surface = surface;
               top_height = h;
               top = &p;
               top_u = u;
@@ -579,6 +585,36 @@ FilletInstance make_touching_partner(const FilletRenderer& renderer, FilletInsta
     place(lateral);
   }
   place(lateral - overlap_mm);
+  return partner;
+}
+
+FilletInstance make_overlapping_partner(const FilletRenderer& renderer, FilletInstance& first,
+                                        FilletInstance partner, bool to_the_left,
+                                        double relative_angle_rad, double along_offset_mm,
+                                        double overlap_mm, int group_id) {
+  partner = make_touching_partner(renderer, first, partner, to_the_left, relative_angle_rad,
+                                  along_offset_mm, overlap_mm, group_id);
+  // It rests on the highest point of `first` under it: sample its silhouette's outline and a
+  // grid inside its bounding box.
+  const std::vector<cv::Point2d> outline = renderer.silhouette_outline_mm(partner);
+  cv::Point2d low = outline.front();
+  cv::Point2d high = outline.front();
+  for (const cv::Point2d& point : outline) {
+    low = {std::min(low.x, point.x), std::min(low.y, point.y)};
+    high = {std::max(high.x, point.x), std::max(high.y, point.y)};
+  }
+  constexpr int kGrid = 40;
+  double rest_mm = 0.0;
+  for (int i = 0; i <= kGrid; ++i) {
+    for (int j = 0; j <= kGrid; ++j) {
+      const cv::Point2d point(low.x + (high.x - low.x) * i / kGrid,
+                              low.y + (high.y - low.y) * j / kGrid);
+      if (renderer.silhouette_height_mm(partner, point) > 0.0) {
+        rest_mm = std::max(rest_mm, renderer.silhouette_height_mm(first, point));
+      }
+    }
+  }
+  partner.lift_mm = first.lift_mm + rest_mm;
   return partner;
 }
 

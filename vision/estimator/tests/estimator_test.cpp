@@ -143,6 +143,71 @@ TEST(FilletEstimator, TouchingPairsAreFlagged) {
   }
 }
 
+// The renderer's overlap: the fillet lying on the other is the one seen where they overlap.
+// Rendered cleanly (no blur or noise), a pixel inside both silhouettes is the same with the
+// lower fillet present as without it; the upper one rests on the lower one's thickness, no
+// more than the thickest variant's 40 mm (+5 % scale) and more than nothing.
+TEST(FilletRenderer, AFilletLyingOnAnotherIsTheOneSeenWhereTheyOverlap) {
+  const auto camera = camera_640();
+  render::FilletInstance lower;
+  lower.angle_rad = 0.3;
+  render::FilletInstance upper;
+  upper.side = SideUp::kBone;  // a different surface, so a wrong winner would show
+  upper = render::make_overlapping_partner(renderer(), lower, upper, true, 1.2, 10.0, 30.0, 1);
+  EXPECT_GT(upper.lift_mm, 0.0);
+  EXPECT_LE(upper.lift_mm, 42.0);
+  EXPECT_EQ(lower.lift_mm, 0.0);
+  render::Scene both;
+  both.fillets = {upper, lower};  // the upper first: colour jitter goes by index
+  render::Scene alone;
+  alone.fillets = {upper};
+  const auto frame_both = renderer().render(camera, both);
+  const auto frame_alone = renderer().render(camera, alone);
+  int overlap_pixels = 0;
+  int differing = 0;
+  for (int row = 0; row < camera.height_px; row += 2) {
+    for (int col = 0; col < camera.width_px; col += 2) {
+      const cv::Point2d belt = render::pixel_to_belt(camera, {col + 0.0, row + 0.0});
+      // 1 mm inside both silhouettes, clear of anti-aliased edges.
+      bool inside = true;
+      for (const cv::Point2d offset :
+           {cv::Point2d(1, 0), cv::Point2d(-1, 0), cv::Point2d(0, 1), cv::Point2d(0, -1)}) {
+        inside = inside && renderer().silhouette_height_mm(upper, belt + offset) > 0.0 &&
+                 renderer().silhouette_height_mm(lower, belt + offset) > 0.0;
+      }
+      if (!inside) continue;
+      ++overlap_pixels;
+      if (frame_both.bgr.at<cv::Vec3b>(row, col) != frame_alone.bgr.at<cv::Vec3b>(row, col)) {
+        ++differing;
+      }
+    }
+  }
+  EXPECT_GT(overlap_pixels, 100);  // 30 mm of overlap: thousands of square millimetres
+  EXPECT_EQ(differing, 0);
+}
+
+TEST(FilletEstimator, OverlappingPairsAreFlagged) {
+  const auto camera = camera_640();
+  FilletEstimator estimator(exact_calibration(camera));
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    const auto scene = testing::random_scene(
+        camera, 310000 + seed,
+        {.overlapping_pair = true, .neighbours = false, .realistic = true, .nominal_shape = false});
+    ASSERT_EQ(scene.fillets.size(), 2U);
+    const auto frame = renderer().render(camera, scene);
+    const auto result = estimator.estimate(frame.bgr, 0, 0);
+    ASSERT_EQ(result.status, FrameStatus::kOk);
+    int fillet_blobs = 0;
+    for (const auto& blob : result.blobs) {
+      if (blob.status != BlobStatus::kFillet) continue;
+      ++fillet_blobs;
+      EXPECT_FALSE(blob.estimate.singulated) << "area " << blob.features.area_mm2;
+    }
+    EXPECT_GE(fillet_blobs, 1);
+  }
+}
+
 // A camera tilted 5 and 3 degrees (perspective) with its exact homography: the polygon moments
 // in belt millimetres keep the pose within 2 mm and 2 degrees.
 TEST(FilletEstimator, PerspectiveCamera) {

@@ -76,6 +76,15 @@ render::Scene random_scene(const render::RenderCamera& camera, std::uint64_t see
                                               relative, rng.uniform(-40.0, 40.0),
                                               rng.uniform(0.5, 3.0), 1);
       middle = {first, partner};
+    } else if (options.overlapping_pair) {
+      // One slid 15 to 45 mm (a fifth to three fifths of the 72 mm width) onto the other, at
+      // any relative heading: on the bulk belt they land every which way.
+      render::FilletInstance partner = random_fillet();
+      partner =
+          render::make_overlapping_partner(renderer(), first, partner, rng.uniform(0, 2) == 0,
+                                           rng.uniform(-std::numbers::pi, std::numbers::pi),
+                                           rng.uniform(-50.0, 50.0), rng.uniform(15.0, 45.0), 1);
+      middle = {first, partner};
     } else {
       middle = {first};
     }

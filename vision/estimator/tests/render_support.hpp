@@ -29,10 +29,11 @@ BeltCalibration exact_calibration(const render::RenderCamera& camera);
 render::ImagingConditions realistic_imaging(cv::RNG& rng);
 
 struct RandomSceneOptions {
-  bool touching_pair = false;  // a touching pair instead of one fillet in the middle
-  bool neighbours = true;      // fillets cut by the frame edges before and after
-  bool realistic = true;       // realistic_imaging(); otherwise clean
-  bool nominal_shape = false;  // only the nominal mesh shape (else any of kShapeVariants)
+  bool touching_pair = false;     // a touching pair instead of one fillet in the middle
+  bool overlapping_pair = false;  // or a pair with one lying partly on the other
+  bool neighbours = true;         // fillets cut by the frame edges before and after
+  bool realistic = true;          // realistic_imaging(); otherwise clean
+  bool nominal_shape = false;     // only the nominal mesh shape (else any of kShapeVariants)
 };
 // A random scene: one fully visible fillet (or pair) anywhere in view at any angle, random
 // size, scale (+-5 %), hand and side, plus partial neighbours. Retries placements until the

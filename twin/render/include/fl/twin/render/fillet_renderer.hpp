@@ -106,7 +106,8 @@ struct FilletInstance {
   double scale = 1.0;       // uniform size factor (real fillets spread, ~ +-5 %)
   Hand hand = Hand::kLeft;  // kLeft is the base mesh, kRight its mirror
   SideUp side = SideUp::kSkin;
-  int group_id = -1;  // >= 0: fillets sharing it touch (one blob); ground truth only
+  int group_id = -1;     // >= 0: fillets sharing it touch (one blob); ground truth only
+  double lift_mm = 0.0;  // lying on another fillet: its surface this much higher (>= 0)
 };
 
 struct Scene {
@@ -187,5 +188,13 @@ FilletInstance make_touching_partner(const FilletRenderer& renderer, FilletInsta
                                      FilletInstance partner_template, bool to_the_left,
                                      double relative_angle_rad, double along_offset_mm,
                                      double overlap_mm, int group_id);
+
+// A second fillet lying partly on top of `first`, as one that slid onto its neighbour: placed
+// as make_touching_partner with `overlap_mm` of overlap across the silhouettes, then lifted by
+// the thickness of `first` under it, so its surface is the one seen where they overlap.
+FilletInstance make_overlapping_partner(const FilletRenderer& renderer, FilletInstance& first,
+                                        FilletInstance partner_template, bool to_the_left,
+                                        double relative_angle_rad, double along_offset_mm,
+                                        double overlap_mm, int group_id);
 
 }  // namespace fl::render
