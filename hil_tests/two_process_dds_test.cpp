@@ -24,6 +24,8 @@
 #include "fl/controller/line_controller.hpp"
 #include "fl/drivers/dds/entity.hpp"
 #include "fl/drivers/dds/qos.hpp"
+#include "fl/vision/record/recording.hpp"
+#include "fl/vision/record/replay.hpp"
 #include "process_support.hpp"
 
 namespace fl {
@@ -70,10 +72,11 @@ struct TwoProcessRun {
 };
 
 TwoProcessRun run_control_and_twin(const fs::path& dir) {
-  const pid_t control = spawn(
-      {FL_LINECTL, "control", "--duration", kDuration, "--domain", kDomain, "--fifo", kControlFifo,
-       "--json", (dir / "control.json").string(), "--ledger", (dir / "ledger.csv").string()},
-      dir / "control.log");
+  const pid_t control =
+      spawn({FL_LINECTL, "control", "--duration", kDuration, "--domain", kDomain, "--fifo",
+             kControlFifo, "--json", (dir / "control.json").string(), "--ledger",
+             (dir / "ledger.csv").string(), "--record", (dir / "control.mcap").string()},
+            dir / "control.log");
   const pid_t twin = spawn({FL_LINECTL, "twin", "serve", "--plant", "fast", "--seed",
                             std::to_string(kSeed), "--duration", kDuration, "--domain", kDomain,
                             "--fifo", kTwinFifo, "--json", (dir / "twin.json").string()},
@@ -139,6 +142,20 @@ TEST(TwoProcessDds, ControlAndTwinOverLoopbackMatchTheInProcessRun) {
   EXPECT_EQ(control_kpis["dds"]["telemetry_write_failures"].get<int>(), 0);
   // A clean run raises no fault, so fl/line/faults stays empty.
   EXPECT_EQ(control_kpis["dds"]["fault_reports_published"].get<int>(), 0);
+
+  // The controller's own recording (--record) replays to the same decision in every scan:
+  // the line state and the estimates as they arrived are all a decision depends on, and the
+  // operator's start and stop ride in the recorded input images.
+  EXPECT_EQ(control_kpis["record"]["scans_dropped"].get<int>(), 0);
+  const fl::vision::record::Recording recording =
+      fl::vision::record::load_recording(dir / "control.mcap");
+  EXPECT_EQ(recording.scans.size(), control_kpis["record"]["scans_written"].get<std::size_t>());
+  EXPECT_EQ(recording.scans.size(), control_kpis["runtime"]["scans"].get<std::size_t>());
+  const fl::vision::record::ReplayResult replayed =
+      fl::vision::record::replay(recording, fl::vision::record::ReplayOptions{});
+  EXPECT_EQ(replayed.scans_with_recorded_output, recording.scans.size());
+  EXPECT_EQ(replayed.scans_differing_from_recording, 0U)
+      << "first at scan " << replayed.first_scan_differing.value_or(0);
 
   // The KPIs of the lock-step run with the same seed.
   const double in_spec = twin_kpis["in_spec_share_of_singulated"].get<double>();

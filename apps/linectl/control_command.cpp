@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
+#include <sstream>
 #include <thread>
 
 #include "cli_support.hpp"
@@ -76,6 +77,7 @@ struct ControlParts {
   dds::DdsTelemetryPublisher& telemetry;
   dds::DdsCameraInput& cameras;
   dds::DdsLineOutput& output;
+  ControlRecorder* recorder;  // --record, or nullptr
 };
 
 // Where the modes differ once the scan runs.
@@ -116,6 +118,9 @@ CLI::App* add_control_subcommand(CLI::App& app, ControlArgs& args) {
                       "(e.g. can0, vcan0) instead of the DDS sensor and command topics");
   control->add_option("--can-config", args.can_config,
                       "--can: the bus configuration (default can.yaml)");
+  control->add_option("--record", args.record_path,
+                      "record every scan's line state and the estimates as they arrived (MCAP; "
+                      "linectl replay runs it through the controller again)");
   return control;
 }
 
@@ -152,6 +157,7 @@ int run_control(ControlParts& parts, dds::DdsProcessIo& io, const ModeHooks& hoo
       log_control_event(*event);
       if (auto fault = dds::fault_report(*event)) parts.telemetry.publish(*fault);
     }
+    if (parts.recorder != nullptr) parts.recorder->drain();
     if (const RuntimeFault fault = runtime_fault.exchange(RuntimeFault::kNone);
         fault != RuntimeFault::kNone) {
       parts.telemetry.publish(dds::FaultReport{monotonic_now_ns(), dds::FaultOrigin::kRuntime, true,
@@ -222,6 +228,14 @@ int run_control(ControlParts& parts, dds::DdsProcessIo& io, const ModeHooks& hoo
   drain();
   parts.controller.close_all_in_transit(io.last_scan_time_ns(), LostReason::kRunEnded);
   drain();
+  if (parts.recorder != nullptr) {
+    parts.recorder->close();
+    spdlog::info(
+        "control: {} scans recorded to {}{}", parts.recorder->scans_written(), args.record_path,
+        parts.recorder->scans_dropped() > 0
+            ? fmt::format(", {} dropped (the writer fell behind)", parts.recorder->scans_dropped())
+            : std::string());
+  }
 
   Kpis kpis;
   kpis.plant = args.can_interface.empty() ? "dds" : "canopen+dds";
@@ -255,6 +269,11 @@ int run_control(ControlParts& parts, dds::DdsProcessIo& io, const ModeHooks& hoo
                  {"kpis_published", telemetry.kpis_published},
                  {"fault_reports_published", telemetry.faults_published},
                  {"telemetry_write_failures", telemetry.write_failures}};
+  if (parts.recorder != nullptr) {
+    json["record"] = {{"path", args.record_path},
+                      {"scans_written", parts.recorder->scans_written()},
+                      {"scans_dropped", parts.recorder->scans_dropped()}};
+  }
   hooks.report(json);
 
   std::printf(
@@ -481,11 +500,31 @@ int control_command(const ControlArgs& args) {
   logic.attach_status(&status);
   dds::DdsTelemetryPublisher telemetry(participant);
 
+  std::unique_ptr<ControlRecorder> recorder;
+  if (!args.record_path.empty()) {
+    if (!args.record_factory) {
+      spdlog::error("control: --record: this binary has no recording library (use linectl)");
+      return 2;
+    }
+    const std::filesystem::path config_path = config_or_default(args.config, "line.yaml");
+    std::ifstream config_file(config_path);
+    std::ostringstream config_text;
+    config_text << config_file.rdbuf();
+    try {
+      recorder = args.record_factory(config_text.str(), args.record_path);
+    } catch (const std::exception& error) {
+      spdlog::error("control: --record {}: {}", args.record_path, error.what());
+      return 2;
+    }
+    logic.attach_recorder(recorder.get());
+    spdlog::info("control: recording every scan to {}", args.record_path);
+  }
+
   std::signal(SIGINT, on_control_signal);
   std::signal(SIGTERM, on_control_signal);
 
-  ControlParts parts{args,  *times, line,      ledger,  controller,
-                     logic, status, telemetry, cameras, output};
+  ControlParts parts{args,   *times,    line,    ledger, controller,    logic,
+                     status, telemetry, cameras, output, recorder.get()};
   return args.can_interface.empty() ? control_over_dds(parts, participant)
                                     : control_over_can(parts);
 }

@@ -26,6 +26,7 @@
 #include "camera_node_command.hpp"
 #include "cli_support.hpp"
 #include "compare_command.hpp"
+#include "control_recording.hpp"
 #include "dem_output.hpp"
 #include "duration.hpp"
 #include "fl/apps/closed_loop.hpp"
@@ -246,6 +247,7 @@ int main(int argc, char** argv) {
   TwinServeArgs twin_args;
   CLI::App* twin_serve = add_twin_subcommand(app, twin_args);
   ControlArgs control_args;
+  control_args.record_factory = control_recorder_factory();
   CLI::App* control = add_control_subcommand(app, control_args);
   CameraServeArgs camera_args;
   CLI::App* camera_serve = add_camera_subcommand(app, camera_args);

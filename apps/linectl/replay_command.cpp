@@ -56,7 +56,9 @@ int replay_command(const ReplayArgs& args) {
   std::int64_t recorded_ns = 0;
   try {
     const rec::Recording recording = rec::load_recording(args.recording);
-    if (!recording.scans.empty()) recorded_ns = recording.scans.back().input.time_ns;
+    if (!recording.scans.empty()) {
+      recorded_ns = recording.scans.back().input.time_ns - recording.scans.front().input.time_ns;
+    }
     spdlog::info("{}: {} messages, {} scans{}", args.recording, recording.message_count,
                  recording.scans.size(),
                  recording.scans.empty() ? " (no line state: the vision replays alone)" : "");
@@ -72,6 +74,15 @@ int replay_command(const ReplayArgs& args) {
       recorded_ns > 0 && wall_s > 0.0
           ? fmt::format(" ({:.0f}x real time)", static_cast<double>(recorded_ns) / 1e9 / wall_s)
           : std::string());
+  if (result.scans_with_recorded_output > 0) {
+    if (result.scans_differing_from_recording == 0) {
+      spdlog::info("every one of {} scans decided as recorded", result.scans_with_recorded_output);
+    } else {
+      spdlog::warn("{} of {} scans decided differently from the recording, the first scan {}",
+                   result.scans_differing_from_recording, result.scans_with_recorded_output,
+                   *result.first_scan_differing);
+    }
+  }
   if (result.frames_differing_from_recording > 0) {
     spdlog::info(
         "{} frames measure differently from the estimates recorded with them (the "

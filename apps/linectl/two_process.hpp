@@ -13,9 +13,28 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
 
+#include "fl/controller/runtime.hpp"
+
 namespace fl::apps {
+
+// `control --record FILE`: every scan's images as the controller saw them (line state and
+// the cameras' estimates as they arrived), written as an MCAP recording that `linectl
+// replay` runs through the controller again. on_scan() runs on the scan thread; drain() and
+// close() on the thread that drains the controller's rings.
+class ControlRecorder : public ScanRecorder {
+ public:
+  virtual void drain() = 0;  // writes what the scans handed over so far
+  virtual void close() = 0;  // drains, then finishes the file (summary, index)
+  [[nodiscard]] virtual std::uint64_t scans_written() const = 0;
+  [[nodiscard]] virtual std::uint64_t scans_dropped() const = 0;  // handover ring full
+};
+// Opens the recording at `path`, with the line configuration's text attached.
+using ControlRecorderFactory = std::function<std::unique_ptr<ControlRecorder>(
+    const std::string& line_yaml_text, const std::string& path)>;
 
 struct TwinServeArgs {
   std::string plant = "fast";
@@ -45,6 +64,9 @@ struct ControlArgs {
   int cpu_dma_latency_us = -1;
   std::string can_interface;  // set: drives and I/O through the CANopen master on it
   std::string can_config;     // default can.yaml
+  std::string record_path;    // set: record every scan (needs record_factory)
+  // Set by linectl (which links the recording library); empty in binaries without it.
+  ControlRecorderFactory record_factory;
 };
 
 CLI::App* add_twin_subcommand(CLI::App& app, TwinServeArgs& args);

@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include "fl/controller/line_config.hpp"
 #include "fl/controller/line_controller.hpp"
@@ -213,6 +214,65 @@ TEST(LineControllerLogic, HandsOperatorCommandsToTheScanThread) {
   in.time_ns += 10'000'000;
   logic.update(in, out);
   EXPECT_NE(controller.state(), LineState::kRunning);
+}
+
+// What a recorder keeps of each scan; the requests are what matter here.
+class RequestLog final : public ScanRecorder {
+ public:
+  void on_scan(std::uint64_t scan, const InputImage& in, const OutputImage& out) override {
+    scans.push_back(scan);
+    starts.push_back(in.start_request);
+    stops.push_back(in.stop_request);
+    states.push_back(out.state);
+  }
+  std::vector<std::uint64_t> scans;
+  std::vector<bool> starts;
+  std::vector<bool> stops;
+  std::vector<LineState> states;
+};
+
+// The operator's requests ride in the scan's input image, so a recorder that keeps only the
+// images (linectl control --record) has them for the replay: the start in the first scan
+// after it was asked for, then no more, and the stop likewise.
+TEST(LineControllerLogic, RecordedImagesCarryTheOperatorsRequests) {
+  const LineConfig config = default_line_config();
+  LineController controller(config);
+  LineControllerLogic logic(controller);
+  RequestLog log;
+  logic.attach_recorder(&log);
+  InputImage in{};
+  in.estop_ok = true;
+  for (DriveFeedback& drive : in.drives) drive.ready = true;
+  OutputImage out{};
+  const auto scan = [&] {
+    in.time_ns += 10'000'000;
+    logic.update(in, out);
+    logic.after_scan(in, out, ScanTimingSample{});
+  };
+  logic.request_start();
+  scan();
+  scan();
+  logic.request_stop();
+  scan();
+  EXPECT_EQ(log.scans, (std::vector<std::uint64_t>{0, 1, 2}));
+  EXPECT_EQ(log.starts, (std::vector<bool>{true, false, false}));
+  EXPECT_EQ(log.stops, (std::vector<bool>{false, false, true}));
+  EXPECT_EQ(log.states[1], LineState::kRunning);
+  EXPECT_FALSE(in.start_request);  // the caller's image is left as it was
+  // The same images without the logic's flags, straight into a fresh controller, decide the
+  // same: the replay's situation.
+  LineController replayed(config);
+  InputImage again{};
+  again.estop_ok = true;
+  for (DriveFeedback& drive : again.drives) drive.ready = true;
+  for (std::size_t i = 0; i < log.scans.size(); ++i) {
+    again.time_ns = static_cast<std::int64_t>(i + 1) * 10'000'000;
+    again.start_request = log.starts[i];
+    again.stop_request = log.stops[i];
+    OutputImage replayed_out{};
+    replayed.update(again, replayed_out);
+    EXPECT_EQ(replayed_out.state, log.states[i]) << "scan " << i;
+  }
 }
 
 }  // namespace

@@ -314,6 +314,13 @@ ReplayResult replay(const Recording& recording, const ReplayOptions& options) {
     GoldenEntry entry;
     entry.header = "scan " + std::to_string(scan.scan) + " " + time_s(in.time_ns);
     const auto fields = output_fields(out);
+    if (scan.recorded_output) {
+      ++result.scans_with_recorded_output;
+      if (output_fields(*scan.recorded_output) != fields) {
+        ++result.scans_differing_from_recording;
+        if (!result.first_scan_differing) result.first_scan_differing = scan.scan;
+      }
+    }
     for (std::size_t f = 0; f < fields.size(); ++f) {
       if (previous.empty() || previous[f].second != fields[f].second) {
         entry.lines.push_back("out " + fields[f].first + " " + fields[f].second);

@@ -76,10 +76,24 @@ class ScanLogic {
                           const ScanTimingSample& /*timing*/) {}
 };
 
+// Receives every scan's images as the line's logic saw them, the operator's requests
+// included, on the scan thread after the scan: real-time, so an implementation copies into
+// preallocated memory and writes elsewhere (linectl control --record).
+class ScanRecorder {
+ public:
+  ScanRecorder() = default;
+  ScanRecorder(const ScanRecorder&) = delete;
+  ScanRecorder& operator=(const ScanRecorder&) = delete;
+  virtual ~ScanRecorder() = default;
+  virtual void on_scan(std::uint64_t scan, const InputImage& in, const OutputImage& out) = 0;
+};
+
 // Adapter from the line's logic to the runtime. LineController has no overrun input of its
 // own; it sees the skipped periods as a jump of in.time_ns, and the count is kept here.
 // LineController's operator commands are not thread-safe; the ones here are: they set a flag
-// that the scan thread hands to the controller at the start of its next update().
+// that the scan thread puts into the next scan's input image (start_request, stop_request,
+// fault_reset_request, as the line's buttons would), so a recording of the images alone
+// replays the operator's actions too.
 class LineControllerLogic final : public ScanLogic {
  public:
   explicit LineControllerLogic(LineController& controller) : controller_(controller) {}
@@ -92,6 +106,8 @@ class LineControllerLogic final : public ScanLogic {
   // Publish a LineStatus snapshot after every scan (the HMI reads them). Call before the
   // runtime starts; the publisher must outlive the runtime.
   void attach_status(LineStatusPublisher* publisher) noexcept { status_ = publisher; }
+  // Hand every scan's images to `recorder` (same rules as attach_status).
+  void attach_recorder(ScanRecorder* recorder) noexcept { recorder_ = recorder; }
 
   // Any thread.
   void request_start() noexcept { start_requested_.store(true, std::memory_order_release); }
@@ -107,6 +123,9 @@ class LineControllerLogic final : public ScanLogic {
  private:
   LineController& controller_;
   LineStatusPublisher* status_ = nullptr;
+  ScanRecorder* recorder_ = nullptr;
+  InputImage applied_{};  // the last scan's input with the operator's requests in it
+  std::uint64_t scans_ = 0;
   std::atomic<bool> start_requested_{false};
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> ack_requested_{false};

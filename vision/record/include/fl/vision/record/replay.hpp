@@ -50,6 +50,12 @@ struct ReplayResult {
   // Frames whose replayed estimates differ from the estimates recorded with them (the
   // recording was made with another estimator or other parameters); informational.
   std::uint64_t frames_differing_from_recording = 0;
+  // Scans whose replayed outputs differ from the command and status recorded with them, of
+  // those that have them: 0 for a recording of this controller (linectl control --record,
+  // or the twin's) replayed unchanged; informational.
+  std::uint64_t scans_with_recorded_output = 0;
+  std::uint64_t scans_differing_from_recording = 0;
+  std::optional<std::uint64_t> first_scan_differing;
 };
 
 // Throws RecordingError for a recording that cannot be replayed (a frame that does not
