@@ -6,6 +6,7 @@
 
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "fl/controller/config_loader.hpp"
 #include "fl/controller/yaml_reader.hpp"
@@ -153,61 +154,62 @@ TEST(CanConfig, ARegroupedPdoMappingLoads) {
 }
 
 TEST(CanConfig, BadPdoMappingsAreNamedWithTheirKeyAndReason) {
-  const LineConfig line = test::reference_line_config();
-  const std::string reference = reference_text();
   const std::string drive_rpdo1 = R"(rpdo1: ["0x60400010", "0x60FF0020"])";
   const std::string drive_tpdo2 = R"(tpdo2: ["0x606C0020"])";
-  // Not a mapping value.
-  std::string problems =
-      problems_of(replaced(reference, drive_rpdo1, R"(rpdo1: ["0x60400010", "target"])"), line);
-  EXPECT_NE(problems.find("pdo_mapping.drive.rpdo1"), std::string::npos) << problems;
-  EXPECT_NE(problems.find("expected a mapping value such as 0x60400010"), std::string::npos)
-      << problems;
-  // CiA 402's vl target velocity (0x6042, 16 bits) is not what this master commands: the
-  // problem lists what the PDO can carry.
-  problems =
-      problems_of(replaced(reference, drive_rpdo1, R"(rpdo1: ["0x60400010", "0x60420010"])"), line);
-  EXPECT_NE(problems.find("not an object this master exchanges with a drive"), std::string::npos)
-      << problems;
-  EXPECT_NE(problems.find("0x60FF0020 (target velocity)"), std::string::npos) << problems;
-  // The right object with the wrong length is no match either.
-  problems =
-      problems_of(replaced(reference, drive_rpdo1, R"(rpdo1: ["0x60400020", "0x60FF0020"])"), line);
-  EXPECT_NE(problems.find("not an object this master exchanges"), std::string::npos) << problems;
-  // The statusword comes from the drive: not in an RPDO (and then the controlword is missing).
-  problems =
-      problems_of(replaced(reference, drive_rpdo1, R"(rpdo1: ["0x60410010", "0x60FF0020"])"), line);
-  EXPECT_NE(problems.find("statusword is sent by the device: it belongs in a TPDO"),
-            std::string::npos)
-      << problems;
-  EXPECT_NE(problems.find("no PDO carries 0x60400010 (controlword)"), std::string::npos)
-      << problems;
-  // Velocity actual mapped nowhere.
-  problems = problems_of(replaced(reference, drive_tpdo2, R"(tpdo2: [])"), line);
-  EXPECT_NE(problems.find("no PDO carries 0x606C0020 (velocity actual)"), std::string::npos)
-      << problems;
-  // Mapped twice, and one PDO over 8 bytes (2 + 4 + 4).
-  problems = problems_of(replaced(reference, R"(rpdo2: ["0x60830020", "0x60840020"])",
-                                  R"(rpdo2: ["0x60400010", "0x60830020", "0x60840020"])"),
-                         line);
-  EXPECT_NE(problems.find("0x60400010 (controlword) is also mapped in rpdo1"), std::string::npos)
-      << problems;
-  EXPECT_NE(problems.find("carries 10 bytes, more than a CAN frame's 8"), std::string::npos)
-      << problems;
-  // An I/O module's object in a drive's PDO.
-  problems =
-      problems_of(replaced(reference, drive_tpdo2, R"(tpdo2: ["0x606C0020", "0x60000108"])"), line);
-  EXPECT_NE(problems.find("not an object this master exchanges with a drive"), std::string::npos)
-      << problems;
-  // Nine entries.
-  problems = problems_of(
-      replaced(reference, drive_tpdo2,
-               R"(tpdo2: ["0x606C0020", "0x606C0020", "0x606C0020", "0x606C0020", "0x606C0020",)"
-               R"( "0x606C0020", "0x606C0020", "0x606C0020", "0x606C0020"])"),
-      line);
-  EXPECT_NE(problems.find("maps 9 objects, a PDO holds at most 8"), std::string::npos) << problems;
-  // Every problem names the file and a line.
-  EXPECT_NE(problems.find("can.yaml:"), std::string::npos) << problems;
+  const std::string nine_entries =
+      R"(tpdo2: ["0x606C0020", "0x606C0020", "0x606C0020", "0x606C0020", "0x606C0020",)"
+      R"( "0x606C0020", "0x606C0020", "0x606C0020", "0x606C0020"])";
+  struct Case {
+    const char* what;
+    std::string from;
+    std::string to;
+    std::vector<std::string> expected;  // each in the problems, which name file and line
+  };
+  const std::vector<Case> cases{
+      {"not a mapping value",
+       drive_rpdo1,
+       R"(rpdo1: ["0x60400010", "target"])",
+       {"can.yaml:", "pdo_mapping.drive.rpdo1", "expected a mapping value such as 0x60400010"}},
+      // CiA 402's vl target velocity (0x6042, 16 bits) is not what this master commands: the
+      // problem lists what the PDO can carry.
+      {"another object",
+       drive_rpdo1,
+       R"(rpdo1: ["0x60400010", "0x60420010"])",
+       {"not an object this master exchanges with a drive", "0x60FF0020 (target velocity)"}},
+      {"the right object, the wrong length",
+       drive_rpdo1,
+       R"(rpdo1: ["0x60400020", "0x60FF0020"])",
+       {"not an object this master exchanges"}},
+      // The statusword comes from the drive; and then the controlword is missing.
+      {"the wrong direction",
+       drive_rpdo1,
+       R"(rpdo1: ["0x60410010", "0x60FF0020"])",
+       {"statusword is sent by the device: it belongs in a TPDO",
+        "no PDO carries 0x60400010 (controlword)"}},
+      {"mapped nowhere",
+       drive_tpdo2,
+       R"(tpdo2: [])",
+       {"no PDO carries 0x606C0020 (velocity actual)"}},
+      // 2 + 4 + 4 bytes.
+      {"mapped twice, and too long",
+       R"(rpdo2: ["0x60830020", "0x60840020"])",
+       R"(rpdo2: ["0x60400010", "0x60830020", "0x60840020"])",
+       {"0x60400010 (controlword) is also mapped in rpdo1",
+        "carries 10 bytes, more than a CAN frame's 8"}},
+      {"an I/O module's object",
+       drive_tpdo2,
+       R"(tpdo2: ["0x606C0020", "0x60000108"])",
+       {"not an object this master exchanges with a drive"}},
+      {"nine entries", drive_tpdo2, nine_entries, {"maps 9 objects, a PDO holds at most 8"}},
+  };
+  const LineConfig line = test::reference_line_config();
+  for (const Case& bad : cases) {
+    SCOPED_TRACE(bad.what);
+    const std::string problems = problems_of(replaced(reference_text(), bad.from, bad.to), line);
+    for (const std::string& expected : bad.expected) {
+      EXPECT_NE(problems.find(expected), std::string::npos) << expected << " in\n" << problems;
+    }
+  }
 }
 
 TEST(CanConfig, MissingFileIsAProblemNotACrash) {
