@@ -17,6 +17,7 @@
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
@@ -26,6 +27,7 @@
 #include "fl/drivers/dds/camera_input.hpp"
 #include "fl/vision/fillet_estimator.hpp"
 #include "fl/vision/record/recording.hpp"
+#include "fl/vision/record/replay.hpp"
 #include "process_support.hpp"
 
 namespace fl {
@@ -138,11 +140,11 @@ TEST_F(CameraNode, PublishesWhatTheInProcessEstimatorMeasures) {
 
   dds::Participant controller(kDomainRecording);
   dds::DdsCameraInput input(controller);
-  const pid_t node =
-      spawn({FL_LINECTL, "camera", "serve", "--recording", recording_path().string(), "--camera",
-             "orientation", "--speed", "2", "--domain", std::to_string(kDomainRecording), "--wait",
-             "20s", "--json", (dir / "node.json").string()},
-            dir / "node.log");
+  const pid_t node = spawn(
+      {FL_LINECTL, "camera", "serve", "--recording", recording_path().string(), "--camera",
+       "orientation", "--speed", "2", "--domain", std::to_string(kDomainRecording), "--wait", "20s",
+       "--json", (dir / "node.json").string(), "--record", (dir / "node.mcap").string()},
+      dir / "node.log");
   ASSERT_GT(node, 0);
   const Received received = receive_while_running(input, node);
   ASSERT_EQ(received.node_exit, 0) << text(dir / "node.log");
@@ -190,6 +192,28 @@ TEST_F(CameraNode, PublishesWhatTheInProcessEstimatorMeasures) {
                 stats["frames_dropped_late"].get<std::size_t>(),
             total);
   EXPECT_EQ(stats["frames_unreadable"].get<int>(), 0);
+
+  // The node's own recording (--record): every frame it served, bit for bit, under the
+  // sequence and exposure it published, and the estimates it published, which its replay
+  // measures again to the same result.
+  const rec::Recording node_recording = rec::load_recording(dir / "node.mcap");
+  const rec::RecordedCamera& served =
+      node_recording.cameras[static_cast<std::size_t>(CameraId::kOrientation)];
+  ASSERT_TRUE(served.has_frames);
+  EXPECT_EQ(served.frames.size() + stats["frames_dropped_late"].get<std::size_t>(), total);
+  for (const auto& [sequence, frame] : served.frames) {
+    const cv::Mat original = rec::decode_frame(camera.frames.at(sequence));
+    EXPECT_EQ(cv::norm(rec::decode_frame(frame), original, cv::NORM_INF), 0.0)
+        << "frame " << sequence;
+    const auto found = received.frames.find(sequence);
+    if (found != received.frames.end()) {
+      EXPECT_EQ(frame.exposure_ns, found->second.frame_time_ns) << "frame " << sequence;
+    }
+  }
+  EXPECT_EQ(node_recording.estimates.size(), stats["frames_published"].get<std::size_t>());
+  const rec::ReplayResult replayed = rec::replay(node_recording, rec::ReplayOptions{});
+  EXPECT_EQ(replayed.frames, node_recording.estimates.size());
+  EXPECT_EQ(replayed.frames_differing_from_recording, 0U);
 }
 
 // An image folder to serve, from the checked-in recording's orientation camera: its

@@ -160,6 +160,9 @@ CLI::App* add_camera_subcommand(CLI::App& app, CameraServeArgs& args) {
       ->check(CLI::Range(0, 232));
   serve->add_option("--wait", args.wait, "how long to wait for a reader, e.g. 30s");
   serve->add_option("--json", args.json_path, "write the node's statistics as JSON");
+  serve->add_option("--record", args.record_path,
+                    "record every frame served and the estimates published (MCAP); linectl "
+                    "replay --frames joins it with the controller's --record");
   return serve;
 }
 
@@ -206,6 +209,20 @@ int camera_serve_command(const CameraServeArgs& args) {
   } catch (const std::invalid_argument& error) {
     spdlog::error("camera serve: {}", error.what());
     return 2;
+  }
+
+  std::unique_ptr<rec::RecordingWriter> recorder;
+  if (!args.record_path.empty()) {
+    rec::WriterSettings settings;
+    settings.info = {{"source", "linectl camera serve: " + opened->source->describe()},
+                     {"camera", args.camera}};
+    try {
+      recorder = std::make_unique<rec::RecordingWriter>(args.record_path, settings);
+      recorder->add_camera(*camera, *calibration);
+    } catch (const std::exception& error) {
+      spdlog::error("camera serve: --record {}: {}", args.record_path, error.what());
+      return 2;
+    }
   }
 
   const dds_domainid_t domain =
@@ -284,6 +301,7 @@ int camera_serve_command(const CameraServeArgs& args) {
     const vision::FrameResult result = estimator->estimate(frame->bgr, exposure_ns, sequence);
     estimate_time.record(monotonic_now_ns() - estimate_start_ns);
     ++stats.frame_status[std::string(vision::to_string(result.status))];
+    bool published = false;
     if (!result.deliverable()) {
       // Not "no fillet": the frame shows nothing of the belt. Its sequence stays a gap; a
       // camera that keeps refusing misses its DDS deadline and the controller's silence limit.
@@ -296,10 +314,17 @@ int camera_serve_command(const CameraServeArgs& args) {
         publisher.publish(*camera, estimates);
         ++stats.frames_published;
         stats.fillets_published += estimates.count;
+        published = true;
       } catch (const std::exception& error) {
         ++stats.publish_failures;
         spdlog::error("camera {}: frame {} not published: {}", args.camera, sequence, error.what());
       }
+    }
+    // After publishing, so that the PNG encoding never delays the estimates: every frame
+    // under the sequence and exposure it was measured with, and what was published of it.
+    if (recorder) {
+      recorder->write_frame(*camera, sequence, exposure_ns, frame->bgr);
+      if (published) recorder->write_estimates(*camera, exposure_ns, result.to_camera_frame());
     }
     const std::int64_t now_ns = monotonic_now_ns();
     lateness.record(now_ns - exposure_ns);
@@ -311,6 +336,11 @@ int camera_serve_command(const CameraServeArgs& args) {
   }
   // Reliable delivery of the last frames before the writer goes: a reader that has not
   // acknowledged them within a second is gone or stalled, and the log says so.
+  if (recorder) {
+    recorder->close();
+    spdlog::info("camera {}: {} frames recorded to {}", args.camera, recorder->frames_written(),
+                 args.record_path);
+  }
   if (dds_wait_for_acks(publisher.writer(), kAckTimeoutNs) != DDS_RETCODE_OK) {
     spdlog::warn("camera {}: not every reader acknowledged the last frames within 1 s",
                  args.camera);

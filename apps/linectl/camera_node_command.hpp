@@ -27,6 +27,7 @@ struct CameraServeArgs {
   int domain = -1;                              // -1: the domain of CYCLONEDDS_URI's configuration
   std::string wait = "30s";                     // how long to wait for a reader before giving up
   std::string json_path;
+  std::string record_path;  // set: every frame served (PNG) and the estimates published
 };
 
 CLI::App* add_camera_subcommand(CLI::App& app, CameraServeArgs& args);

@@ -43,6 +43,7 @@ struct ReplayArgs {
   std::size_t max_differences = 20;
   std::vector<std::string> estimator_settings;  // NAME=VALUE
   std::string config;                           // line configuration; default: the one recorded
+  std::vector<std::string> frames;              // camera node recordings joined (join_frames)
 };
 
 CLI::App* add_record_subcommand(CLI::App& app, RecordArgs& args);

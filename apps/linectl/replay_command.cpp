@@ -40,6 +40,9 @@ CLI::App* add_replay_subcommand(CLI::App& app, ReplayArgs& args) {
   replay->add_option("--set", args.estimator_settings,
                      "estimator parameter NAME=VALUE (EstimatorParams), repeatable");
   replay->add_option("--config", args.config, "line configuration (default: the recorded one)");
+  replay->add_option("--frames", args.frames,
+                     "a camera node's recording (camera serve --record) whose frames the "
+                     "controller's recording (control --record) is replayed with; repeatable");
   return replay;
 }
 
@@ -55,7 +58,11 @@ int replay_command(const ReplayArgs& args) {
   rec::ReplayResult result;
   std::int64_t recorded_ns = 0;
   try {
-    const rec::Recording recording = rec::load_recording(args.recording);
+    rec::Recording recording = rec::load_recording(args.recording);
+    for (const std::string& frames : args.frames) {
+      rec::join_frames(recording, rec::load_recording(frames));
+      spdlog::info("{}: frames joined from {}", args.recording, frames);
+    }
     if (!recording.scans.empty()) {
       recorded_ns = recording.scans.back().input.time_ns - recording.scans.front().input.time_ns;
     }

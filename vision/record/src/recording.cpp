@@ -730,4 +730,26 @@ cv::Mat decode_frame(const RecordedFrame& frame) {
   return image;
 }
 
+void join_frames(Recording& line, const Recording& frames) {
+  const std::string files = line.path.string() + " and " + frames.path.string();
+  for (std::size_t c = 0; c < kCameraCount; ++c) {
+    const RecordedCamera& camera = frames.cameras[c];
+    if (!camera.has_frames) continue;
+    const std::string name(camera_name(static_cast<CameraId>(c)));
+    if (line.cameras[c].has_frames) {
+      throw RecordingError(files + ": both hold frames of camera " + name);
+    }
+    for (const RecordedEstimates& estimates : line.estimates) {
+      if (index(estimates.camera) == c && estimates.frame.sequence != 0 &&
+          camera.frames.count(estimates.frame.sequence) == 0) {
+        throw RecordingError(files + ": " + estimates.where + " names frame " +
+                             std::to_string(estimates.frame.sequence) + " of camera " + name +
+                             ", which " + frames.path.string() +
+                             " does not hold (another run or another camera?)");
+      }
+    }
+    line.cameras[c] = camera;
+  }
+}
+
 }  // namespace fl::vision::record

@@ -118,6 +118,56 @@ TEST(Replay, ResultDoesNotDependOnTheMeasuringThreads) {
   EXPECT_EQ(parallel.entries, sequential.entries);
 }
 
+// On the line PC the controller (control --record) and the camera node (camera serve
+// --record) record apart: the first the estimates as they arrived, the second the frames.
+// Split the checked-in twin recording that way and join it again: the replay is the same,
+// and every scan decides as recorded.
+TEST(Replay, FramesJoinedFromACameraNodeRecordingReplayAsOne) {
+  const Recording whole = load_recording(std::filesystem::path(FL_SOURCE_DIR) /
+                                         "vision/record/testdata/fast_seed1_orientation.mcap");
+  const std::size_t orientation = index(CameraId::kOrientation);
+  ASSERT_TRUE(whole.cameras[orientation].has_frames);
+  Recording line = whole;
+  line.path = "line.mcap";
+  line.cameras[orientation] = RecordedCamera{};
+  Recording frames = whole;
+  frames.path = "camera.mcap";
+  frames.scans.clear();
+  frames.estimates.clear();
+
+  Recording joined = line;
+  join_frames(joined, frames);
+  const ReplayResult expected = replay(whole, {});
+  const ReplayResult result = replay(joined, {});
+  EXPECT_EQ(result.entries, expected.entries);
+  EXPECT_GT(result.frames, 0U);
+  EXPECT_EQ(result.scans_with_recorded_output, whole.scans.size());
+  EXPECT_EQ(result.scans_differing_from_recording, 0U);
+
+  // Frames of that camera twice: refused, naming both files.
+  try {
+    join_frames(joined, frames);
+    FAIL() << "joined a camera's frames twice";
+  } catch (const RecordingError& error) {
+    EXPECT_NE(std::string(error.what()).find("line.mcap and camera.mcap: both hold frames"),
+              std::string::npos)
+        << error.what();
+  }
+  // A frame the controller received estimates of is not in the camera's recording.
+  Recording other_run = frames;
+  const std::uint32_t missing = line.estimates.front().frame.sequence;
+  other_run.cameras[orientation].frames.erase(missing);
+  Recording incomplete = line;
+  try {
+    join_frames(incomplete, other_run);
+    FAIL() << "joined a recording that lacks a frame the controller saw";
+  } catch (const RecordingError& error) {
+    EXPECT_NE(std::string(error.what()).find("names frame " + std::to_string(missing)),
+              std::string::npos)
+        << error.what();
+  }
+}
+
 TEST(Golden, DifferencesAreListedInTimeOrder) {
   const std::vector<GoldenEntry> expected = {
       {"frame orientation 1 t=0.000000000", {"status ok"}},

@@ -170,6 +170,15 @@ struct Recording {
 // RecordingError naming the file and the record.
 Recording load_recording(const std::filesystem::path& path);
 
+// Joins the frames of a camera node's recording (linectl camera serve --record) to a
+// recording of the controller (linectl control --record), which holds the estimates as they
+// reached it: the replay then measures each frame again where the controller received its
+// estimates. Every camera with frames in `frames` is taken over with its calibration. Throws
+// RecordingError naming both files when `line` has frames of that camera already, or when
+// an estimate `line` recorded names a frame sequence `frames` does not hold (a recording
+// of another run or another camera).
+void join_frames(Recording& line, const Recording& frames);
+
 // Decodes a recorded PNG frame to BGR; RecordingError (naming the frame) when it does not.
 cv::Mat decode_frame(const RecordedFrame& frame);
 
