@@ -333,6 +333,7 @@ CanConfig read_can_config(YamlReader& reader, const LineConfig& line) {
     // Optional: without it, canopen::layout's mappings (the defaults of CanConfig).
     if (root.has("pdo_mapping")) {
       YamlMapReader mapping = root.map("pdo_mapping");
+      config.write_pdo_mappings = mapping.read_bool_or("write_to_devices", true);
       if (mapping.has("drive")) {
         YamlMapReader drive = mapping.map("drive");
         DrivePdoMappings& pdos = config.drive_pdos;

@@ -91,6 +91,19 @@ void EmulatedNode::power_cycle() {
   upload_active_ = false;
 }
 
+void EmulatedNode::fix_mapping(std::uint16_t mapping_index, const canopen::PdoMapping& mapping) {
+  for (std::size_t i = 0; i < defaults_.size(); ++i) {
+    ObjectEntry& entry = defaults_[i];
+    if (entry.index != mapping_index) continue;
+    entry.writable = false;
+    entry.value = entry.subindex == 0 ? mapping.count
+                  : entry.subindex <= mapping.count
+                      ? mapping.entries[entry.subindex - 1U].mapping_value()
+                      : 0U;
+    objects_[i] = entry;
+  }
+}
+
 void EmulatedNode::reset_communication() {
   for (std::size_t i = 0; i < objects_.size(); ++i) {
     if (objects_[i].index >= 0x1000 && objects_[i].index <= 0x1FFF) {

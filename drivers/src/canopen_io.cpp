@@ -667,12 +667,15 @@ bool CanopenIo::write_pdo(SdoClient& sdo, NodeId node, std::uint16_t communicati
   };
   std::vector<Step> steps;
   steps.push_back({{communication_index, 1}, cob_id | canopen::kPdoCobIdInvalid, 4});
-  steps.push_back({{mapping_index, 0}, 0, 1});
-  for (std::uint8_t i = 0; i < mapping.count; ++i) {
-    steps.push_back(
-        {{mapping_index, static_cast<std::uint8_t>(i + 1)}, mapping.entries[i].mapping_value(), 4});
+  if (config_.write_pdo_mappings) {
+    steps.push_back({{mapping_index, 0}, 0, 1});
+    for (std::uint8_t i = 0; i < mapping.count; ++i) {
+      steps.push_back({{mapping_index, static_cast<std::uint8_t>(i + 1)},
+                       mapping.entries[i].mapping_value(),
+                       4});
+    }
+    steps.push_back({{mapping_index, 0}, mapping.count, 1});
   }
-  steps.push_back({{mapping_index, 0}, mapping.count, 1});
   steps.push_back({{communication_index, 2}, transmission_type, 1});
   steps.push_back({{communication_index, 1}, cob_id, 4});
   for (const Step& step : steps) {
@@ -683,6 +686,49 @@ bool CanopenIo::write_pdo(SdoClient& sdo, NodeId node, std::uint16_t communicati
                          hex(step.value, 8) + " failed: " + result.describe());
       return false;
     }
+  }
+  return config_.write_pdo_mappings ||
+         check_pdo_mapping(sdo, node, mapping_index, mapping, problems);
+}
+
+bool CanopenIo::check_pdo_mapping(SdoClient& sdo, NodeId node, std::uint16_t mapping_index,
+                                  const canopen::PdoMapping& mapping,
+                                  std::vector<std::string>& problems) {
+  // A built-in mapping is read back: the master packs by can.yaml's, so they must agree.
+  const auto describe = [](const canopen::PdoMapping& entries) {
+    std::string text;
+    for (std::uint8_t i = 0; i < entries.count; ++i) {
+      text += (i == 0 ? "" : ", ") + hex(entries.entries[i].mapping_value(), 8);
+    }
+    return text.empty() ? std::string("nothing") : text;
+  };
+  const std::string where = "node " + std::to_string(node) + ": mapping " + hex(mapping_index, 4);
+  canopen::PdoMapping device;
+  const SdoResult count = sdo.upload(node, {mapping_index, 0});
+  if (!count.ok()) {
+    problems.push_back(where + ": SDO read of the entry count failed: " + count.describe());
+    return false;
+  }
+  if (count.value > canopen::kMaxPdoEntries) {
+    problems.push_back(where + ": the device reports " + std::to_string(count.value) +
+                       " entries, a PDO holds at most 8");
+    return false;
+  }
+  device.count = static_cast<std::uint8_t>(count.value);
+  for (std::uint8_t i = 0; i < device.count; ++i) {
+    const SdoResult entry = sdo.upload(node, {mapping_index, static_cast<std::uint8_t>(i + 1)});
+    if (!entry.ok()) {
+      problems.push_back(where + ": SDO read of entry " + std::to_string(i + 1) +
+                         " failed: " + entry.describe());
+      return false;
+    }
+    device.entries[i] = canopen::PdoEntry::from_mapping_value(entry.value);
+  }
+  if (describe(device) != describe(mapping)) {
+    problems.push_back(where + " on the device is " + describe(device) + ", can.yaml maps " +
+                       describe(mapping) +
+                       " (pdo_mapping.write_to_devices is false: the device's is kept)");
+    return false;
   }
   return true;
 }

@@ -151,6 +151,11 @@ TEST(CanConfig, ARegroupedPdoMappingLoads) {
   EXPECT_EQ(config.drive_pdos.tpdo1.entries[1].index, 0x6041);
   EXPECT_EQ(config.io_pdos.tpdo1.entries[0].mapping_value(), 0x64010310U);
   EXPECT_EQ(config.io_pdos.tpdo1.count, 4);
+  EXPECT_TRUE(config.write_pdo_mappings);  // written by default
+  const CanConfig built_in = parse_can_config(
+      replaced(text, "pdo_mapping:\n", "pdo_mapping:\n  write_to_devices: false\n"), "can.yaml",
+      test::reference_line_config());
+  EXPECT_FALSE(built_in.write_pdo_mappings);
 }
 
 TEST(CanConfig, BadPdoMappingsAreNamedWithTheirKeyAndReason) {

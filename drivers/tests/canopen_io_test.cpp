@@ -250,6 +250,65 @@ TEST(CanopenIo, ARegroupedMappingFromTheConfigReachesTheDevicesAndBack) {
   EXPECT_EQ(rig.io.counters().malformed_frames, 0U);
 }
 
+// Every device of the rig with can.yaml's mappings built in (read-only mapping objects).
+void build_in_mappings(LoopbackRig& rig) {
+  const DrivePdoMappings& drive = rig.config.drive_pdos;
+  for (auto* device : rig.drives) {
+    device->fix_mapping(0x1600, drive.rpdo1);
+    device->fix_mapping(0x1601, drive.rpdo2);
+    device->fix_mapping(0x1A00, drive.tpdo1);
+    device->fix_mapping(0x1A01, drive.tpdo2);
+  }
+  for (auto* device : rig.modules) {
+    device->fix_mapping(0x1600, rig.config.io_pdos.rpdo1);
+    device->fix_mapping(0x1A00, rig.config.io_pdos.tpdo1);
+  }
+}
+
+TEST(CanopenIo, BuiltInMappingsAreReadBackAndCheckedInsteadOfWritten) {
+  // Written, as by default: the devices refuse, and the start-up says which and why.
+  {
+    LoopbackRig rig;
+    build_in_mappings(rig);
+    const StartupReport report = rig.start(true);
+    ASSERT_FALSE(report.ok);
+    ASSERT_FALSE(report.problems.empty());
+    EXPECT_NE(report.problems.front().find("SDO write 0x1600:0x00"), std::string::npos)
+        << report.problems.front();
+    EXPECT_NE(report.problems.front().find("read only"), std::string::npos)
+        << report.problems.front();
+  }
+  CanConfig built_in = test::reference_can_config();
+  built_in.write_pdo_mappings = false;
+  // Told they are built in: read back, found equal, and the line runs on them.
+  {
+    LoopbackRig rig(built_in);
+    build_in_mappings(rig);
+    const StartupReport report = rig.start(true);
+    ASSERT_TRUE(report.ok) << (report.problems.empty() ? "" : report.problems.front());
+    for (int i = 0; i < 3; ++i) rig.scan(all_drives(true, 0.4F));
+    EXPECT_EQ(rig.drive(DriveId::kGuide).state().target_velocity, 4000);  // 0.4 m/s * 10000
+    rig.io.read(rig.now_ns, rig.in);
+    EXPECT_TRUE(rig.in.drives[index(DriveId::kGuide)].ready);
+  }
+  // One drive built with another order than can.yaml's: named with both, and not started.
+  {
+    LoopbackRig rig(built_in);
+    build_in_mappings(rig);
+    rig.drive(DriveId::kGuide).fix_mapping(0x1A00, {{{{0x6064, 0, 32}, {0x6041, 0, 16}}}, 2});
+    const StartupReport report = rig.start(true);
+    ASSERT_FALSE(report.ok);
+    const std::string expected =
+        "node 5: mapping 0x1A00 on the device is 0x60640020, 0x60410010, can.yaml maps "
+        "0x60410010, 0x60640020";
+    bool named = false;
+    for (const std::string& problem : report.problems) {
+      named = named || problem.find(expected) != std::string::npos;
+    }
+    EXPECT_TRUE(named) << report.problems.front();
+  }
+}
+
 // Found by fuzz/fuzz_can_frames (corpus file regression_nan_analogue_output): a NaN in the
 // output image reached a float-to-integer conversion in write(), undefined behaviour. A NaN
 // command now goes out as zero: the analogue output's safe value, the drive's standstill.

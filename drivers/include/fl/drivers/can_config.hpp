@@ -126,6 +126,9 @@ struct CanConfig {
   IoScaling io_scaling;
   DrivePdoMappings drive_pdos;
   IoPdoMappings io_pdos;
+  // false: the devices' mappings are built in; the start-up reads them back and checks them
+  // against drive_pdos and io_pdos instead of writing them (pdo_mapping.write_to_devices).
+  bool write_pdo_mappings = true;
 };
 
 // Throws fl::ConfigError listing every problem.

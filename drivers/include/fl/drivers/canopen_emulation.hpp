@@ -46,6 +46,9 @@ class EmulatedNode {
   void set_silent(bool silent) { silent_ = silent; }
   // Power cycle: defaults restored, boot-up sent at the next tick.
   void power_cycle();
+  // A device whose PDO mapping is built in: the mapping object (0x1600.. or 0x1A00..) holds
+  // `mapping` from power-on and answers writes with "read only", as such devices do.
+  void fix_mapping(std::uint16_t mapping_index, const canopen::PdoMapping& mapping);
 
   [[nodiscard]] const ObjectEntry* find(std::uint16_t index, std::uint8_t subindex) const;
   ObjectEntry* find(std::uint16_t index, std::uint8_t subindex);

@@ -234,6 +234,8 @@ class CanopenIo final : public ProcessIo {
   [[nodiscard]] NodeStatus status_of(std::size_t slot) const;
   bool configure_drive(SdoClient& sdo, std::size_t drive, std::vector<std::string>& problems);
   bool configure_io(SdoClient& sdo, std::size_t module, std::vector<std::string>& problems);
+  bool check_pdo_mapping(SdoClient& sdo, canopen::NodeId node, std::uint16_t mapping_index,
+                         const canopen::PdoMapping& mapping, std::vector<std::string>& problems);
   bool write_pdo(SdoClient& sdo, canopen::NodeId node, std::uint16_t communication_index,
                  std::uint16_t mapping_index, std::uint32_t cob_id, std::uint8_t transmission_type,
                  const canopen::PdoMapping& mapping, std::vector<std::string>& problems);
