@@ -232,6 +232,10 @@ TEST_F(CanTwoProcess, ControlAndTwinRunTheLineOverVcan) {
   // The start-up's resets and the shut-down's NMT stop were the master's own: no fault report.
   EXPECT_EQ(control_kpis["dds"]["fault_reports_published"].get<int>(), 0);
   EXPECT_NEAR(wire["sync_period_mean_ms"].get<double>(), 10.0, 2.0);
+  // Issue 5's latency to the drive command on the bus: each frame the controller read, to the
+  // SYNC that applied its scan's RPDOs, as the kernel stamped it. Measured, not judged: the
+  // emulated guest is no place for a real-time bound (docs/benchmarks.md has the figures).
+  EXPECT_GT(wire["estimate_to_sync_us"]["count"].get<int>(), 0);
 
   if (peer) {
     // The independent peer saw every SYNC the master counted (candump ran before the master

@@ -450,7 +450,9 @@ int control_over_can(ControlParts& parts) {
         {"frames_confirmed", timing.frames_confirmed},
         {"frames_unconfirmed", frames.sends_unconfirmed},
         {"send_delay_mean_us", timing.send_delay_mean_ns() / 1e3},
-        {"send_delay_max_us", static_cast<double>(timing.send_delay_max_ns) / 1e3}};
+        {"send_delay_max_us", static_cast<double>(timing.send_delay_max_ns) / 1e3},
+        {"estimate_to_sync_us", summary_json(io.estimate_to_devices())},
+        {"estimates_unstamped", io.estimates_unstamped()}};
   };
   hooks.print = [&] {
     std::printf(
@@ -471,6 +473,13 @@ int control_over_can(ControlParts& parts) {
           static_cast<double>(timing.sync_period_max_ns) / 1e6,
           static_cast<double>(timing.sync_jitter_ns(config.cycle_period_ns)) / 1e6,
           timing.send_delay_mean_ns() / 1e3, static_cast<double>(timing.send_delay_max_ns) / 1e3);
+      const DistributionSummary reaction = io.estimate_to_devices();
+      std::printf(
+          "can reaction    estimate published -> its command's SYNC on the wire p50 %.1f us "
+          "p99 %.1f us max %.1f us (%llu frames)\n",
+          static_cast<double>(reaction.p50_ns) / 1e3, static_cast<double>(reaction.p99_ns) / 1e3,
+          static_cast<double>(reaction.max_ns) / 1e3,
+          static_cast<unsigned long long>(reaction.count));
     }
   };
   hooks.peer_lost = [&] { return master.counters().heartbeats_lost > 0; };

@@ -176,6 +176,7 @@ std::uint32_t CanopenIo::acceleration_to_drive_units(DriveId drive, float accel_
 // ---------------------------------------------------------------- the cycle
 
 void CanopenIo::read(std::int64_t now_ns, InputImage& in) {
+  const std::int64_t previous_read_ns = now_ns_;
   now_ns_ = now_ns;
   for (std::size_t batch = 0; batch < kMaxBatchesPerRead; ++batch) {
     const std::size_t count = bus_.receive(receive_buffer_);
@@ -187,6 +188,11 @@ void CanopenIo::read(std::int64_t now_ns, InputImage& in) {
     }
   }
   take_send_confirmations();
+  // The previous write() came after the previous read(): a SYNC queued since then is its.
+  write_applied_ns_.reset();
+  if (last_sync_sent_ns_ != 0 && last_sync_queued_ns_ >= previous_read_ns) {
+    write_applied_ns_ = last_sync_sent_ns_;
+  }
   const CanErrorState bus_state = bus_.error_state();
   if (bus_state != bus_state_) {
     const auto previous = static_cast<std::uint8_t>(bus_state_);
@@ -221,6 +227,7 @@ void CanopenIo::take_send_confirmations() {
         ++timing.sync_periods;
       }
       last_sync_sent_ns_ = sent.sent_ns;
+      last_sync_queued_ns_ = sent.queued_ns;
     }
     if (count < confirmation_buffer_.size()) {
       break;
@@ -973,6 +980,7 @@ StartupReport CanopenIo::run_start_up(const BusClock& clock, bool enable_drives)
   take_send_confirmations();
   bus_timing_ = CanBusTiming{};
   last_sync_sent_ns_ = 0;
+  last_sync_queued_ns_ = 0;
   return report;
 }
 

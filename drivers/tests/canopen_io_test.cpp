@@ -614,6 +614,30 @@ TEST(CanopenIo, SyncPeriodsAndSendDelaysComeFromTheBusConfirmations) {
   EXPECT_EQ(rig.master_bus.counters().sends_unconfirmed, 0U);
 }
 
+TEST(CanopenIo, AReadTellsWhenThePreviousWritesSyncWasOnTheWire) {
+  LoopbackRig rig;
+  rig.master_bus.set_send_confirmations(true);
+  ASSERT_TRUE(rig.start(true).ok);
+  const OutputImage out = all_drives(true, 0.4F);
+  rig.io.read(rig.now_ns, rig.in);
+  rig.io.write(out);
+  const std::int64_t written_at = rig.now_ns;  // the loopback puts it on the wire at once
+  rig.advance(LoopbackRig::kCycleNs);
+  rig.io.read(rig.now_ns, rig.in);
+  ASSERT_TRUE(rig.io.last_write_applied_ns().has_value());
+  EXPECT_EQ(*rig.io.last_write_applied_ns(), written_at);
+  // A read with no write since: the old SYNC is not this write's.
+  rig.advance(LoopbackRig::kCycleNs);
+  rig.io.read(rig.now_ns, rig.in);
+  EXPECT_FALSE(rig.io.last_write_applied_ns().has_value());
+  // Without confirmations the transport cannot tell.
+  LoopbackRig plain;
+  ASSERT_TRUE(plain.start(true).ok);
+  plain.scan(out);
+  plain.io.read(plain.now_ns, plain.in);
+  EXPECT_FALSE(plain.io.last_write_applied_ns().has_value());
+}
+
 TEST(CanopenIo, ReadAndWriteNeitherAllocateNorLock) {
   LoopbackRig rig;
   rig.master_bus.set_send_confirmations(true);  // the confirmation path is in the cycle too

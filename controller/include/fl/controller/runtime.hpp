@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <functional>
 #include <latch>
+#include <optional>
 #include <stop_token>
 #include <string>
 #include <thread>
@@ -43,6 +44,13 @@ class ProcessIo {
   // in.time_ns already holds it when read() is called.
   virtual void read(std::int64_t now_ns, InputImage& in) = 0;
   virtual void write(const OutputImage& out) = 0;
+
+  // When the previous write()'s commands took effect at the devices, on CLOCK_MONOTONIC, as
+  // far as the transport can tell once read() has run (a field bus: its SYNC on the wire);
+  // nullopt where it cannot. Real-time.
+  [[nodiscard]] virtual std::optional<std::int64_t> last_write_applied_ns() const {
+    return std::nullopt;
+  }
 };
 
 // One overrunning scan, as ScanLogic::on_overrun sees it.

@@ -130,6 +130,11 @@ class CanopenIo final : public ProcessIo {
 
   void read(std::int64_t now_ns, InputImage& in) override;
   void write(const OutputImage& out) override;
+  // The previous write()'s SYNC on the wire (its synchronous RPDOs take effect at it), when
+  // the transport confirmed it by this read().
+  [[nodiscard]] std::optional<std::int64_t> last_write_applied_ns() const override {
+    return write_applied_ns_;
+  }
 
   // Any one thread other than the scan thread (single consumer).
   bool pop_event(CanopenEvent& event);
@@ -249,6 +254,8 @@ class CanopenIo final : public ProcessIo {
   std::array<CanFrame, kReceiveBatch> receive_buffer_{};
   std::array<CanSendConfirmation, kReceiveBatch> confirmation_buffer_{};
   std::int64_t last_sync_sent_ns_ = 0;  // 0: no SYNC confirmed yet
+  std::int64_t last_sync_queued_ns_ = 0;
+  std::optional<std::int64_t> write_applied_ns_;
   CanBusTiming bus_timing_;
   std::int64_t now_ns_ = 0;
   bool fault_reset_pressed_ = false;

@@ -15,6 +15,7 @@
 #include <atomic>
 #include <cstdint>
 
+#include "fl/controller/cycle_stats.hpp"
 #include "fl/controller/process_image.hpp"
 #include "fl/controller/runtime.hpp"
 #include "fl/drivers/dds/camera_input.hpp"
@@ -53,15 +54,28 @@ class DdsProcessIo final : public ProcessIo {
   [[nodiscard]] std::uint64_t sensors_stale_scans() const noexcept {
     return stale_scans_.load(std::memory_order_relaxed);
   }
+  // With `devices` whose transport stamps its writes (ProcessIo::last_write_applied_ns):
+  // from each camera frame's publication to the command of the first scan that read it
+  // taking effect at the devices (CAN: the SYNC on the wire). Read after the runtime stopped.
+  [[nodiscard]] DistributionSummary estimate_to_devices() const {
+    return estimate_to_devices_.summary();
+  }
+  // Frames whose command the devices' transport could not stamp (not measured).
+  [[nodiscard]] std::uint64_t estimates_unstamped() const { return estimates_unstamped_; }
 
  private:
+  void record_estimate_to_devices();
+
   DdsCameraInput& cameras_;
   DdsSensorInput* sensors_ = nullptr;  // exactly one of these two
   ProcessIo* devices_ = nullptr;
   DdsLineOutput& output_;
   const DdsProcessIoOptions options_;
   FrameStamps stamps_{};      // scan thread's own: the frames this scan read
+  FrameStamps awaiting_{};    // scan thread's own: frames whose command the devices have
   std::int64_t scan_ns_ = 0;  // scan thread's own
+  DurationHistogram estimate_to_devices_{10'000, 200'000'000};  // 10 us bins up to 200 ms
+  std::uint64_t estimates_unstamped_ = 0;
   std::atomic<LineState> state_{LineState::kStopped};
   std::atomic<std::uint32_t> faults_{0};
   std::atomic<std::int64_t> last_scan_ns_{0};
