@@ -11,29 +11,39 @@
 
 #include "fl/controller/config_loader.hpp"
 #include "fl/controller/yaml_reader.hpp"
+#include "hex_text.hpp"
 
 namespace fl::drivers {
 namespace {
 
 using canopen::NodeId;
 
-// COB-IDs are written in hex, as in every device manual ("0x181"); the strict reader's
-// integers are decimal only, so they are read as text and parsed here.
+// COB-IDs and mapping values are written in hex, as in every device manual ("0x181"); the
+// strict reader's integers are decimal only, so they are read as text and parsed here: an
+// unsigned 32-bit number, "0x"-prefixed hex, or decimal unless `hex_only`; nullopt otherwise.
+std::optional<std::uint32_t> parse_number(std::string_view text, bool hex_only) {
+  const bool hex = text.size() > 2 && text[0] == '0' && (text[1] == 'x' || text[1] == 'X');
+  if (hex_only && !hex) return std::nullopt;
+  std::uint32_t value = 0;
+  const char* last = text.data() + text.size();
+  const auto [end, error] =
+      std::from_chars(text.data() + (hex ? 2 : 0), last, value, hex ? 16 : 10);
+  if (error != std::errc{} || end != last) return std::nullopt;
+  return value;
+}
+
 std::uint32_t read_cob_id(YamlMapReader& map, std::string_view key) {
   const std::string text = map.read_string(key);
   if (text.empty()) {
     return 0;  // missing or wrong type: already reported
   }
-  std::uint32_t value = 0;
-  const bool hex = text.size() > 2 && text[0] == '0' && (text[1] == 'x' || text[1] == 'X');
-  const char* first = text.data() + (hex ? 2 : 0);
-  const char* last = text.data() + text.size();
-  const auto [end, error] = std::from_chars(first, last, value, hex ? 16 : 10);
-  if (error != std::errc{} || end != last) {
+  const std::optional<std::uint32_t> parsed = parse_number(text, false);
+  if (!parsed) {
     map.report(key, ProblemKind::kWrongType,
                "expected a COB-ID such as 0x181, found \"" + text + "\"");
     return 0;
   }
+  const std::uint32_t value = *parsed;
   // 0x001..0x07F are NMT error control/reserved low ids; 0x080 is SYNC; above 0x7FF is not
   // an 11-bit id. PDOs live in 0x181..0x57F (CiA 301 table 44; we also allow the user range).
   if (value < 0x181 || value > 0x57F) {
@@ -71,15 +81,6 @@ constexpr std::array<PdoSignalInfo, static_cast<std::size_t>(PdoSignal::kCount)>
     {PdoSignal::kAnalogInput3, {0x6401, 3, 16}, false, false, "analogue input 3"},
 }};
 
-std::string hex_text(std::uint32_t value, int digits) {
-  static constexpr char kDigits[] = "0123456789ABCDEF";
-  std::string text = "0x";
-  for (int shift = 4 * (digits - 1); shift >= 0; shift -= 4) {
-    text += kDigits[(value >> static_cast<unsigned>(shift)) & 0xFU];
-  }
-  return text;
-}
-
 // "0x60400010 (controlword)": how problems name a mapped object.
 std::string describe_object(const canopen::PdoEntry& entry) {
   std::string text = hex_text(entry.mapping_value(), 8);
@@ -106,18 +107,15 @@ canopen::PdoMapping read_pdo_mapping(YamlMapReader& map, std::string_view key, b
   for (std::size_t i = 0; i < texts.size(); ++i) {
     const std::string& text = texts[i];
     const std::string element = "element " + std::to_string(i) + " \"" + text + "\": ";
-    std::uint32_t value = 0;
-    const bool hex = text.size() > 2 && text[0] == '0' && (text[1] == 'x' || text[1] == 'X');
-    const char* last = text.data() + text.size();
-    const auto [end, error] = std::from_chars(text.data() + (hex ? 2 : 0), last, value, 16);
-    if (!hex || error != std::errc{} || end != last) {
+    const std::optional<std::uint32_t> value = parse_number(text, true);
+    if (!value) {
       map.report(key, ProblemKind::kWrongType,
                  element +
                      "expected a mapping value such as 0x60400010 (index 0x6040, "
                      "sub-index 0x00, 16 bits)");
       continue;
     }
-    const canopen::PdoEntry entry = canopen::PdoEntry::from_mapping_value(value);
+    const canopen::PdoEntry entry = canopen::PdoEntry::from_mapping_value(*value);
     const std::optional<PdoSignal> signal = find_pdo_signal(entry);
     if (!signal || info(*signal).drive != drive) {
       std::string known;

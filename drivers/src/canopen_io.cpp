@@ -4,10 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 
 #include "fl/controller/config_loader.hpp"
+#include "hex_text.hpp"
 #include "line_signals.hpp"
 
 namespace fl::drivers {
@@ -22,20 +22,10 @@ namespace {
 constexpr std::uint8_t kSynchronous = 1;    // PDO transmission type: every SYNC
 constexpr std::uint8_t kEventDriven = 255;  // RPDO: applied on receipt
 
-// A cyclic RPDO takes effect at the SYNC, with every other; a ramp-only one on receipt.
-std::uint8_t rpdo_transmission(const canopen::PdoMapping& mapping) {
-  return carries_cyclic_command(mapping) ? kSynchronous : kEventDriven;
-}
 constexpr std::uint16_t kProfileVelocityMode = 3;
 constexpr std::uint32_t kDeviceProfileMask = 0xFFFF;  // 0x1000 low word: the CiA profile
 constexpr std::uint32_t kDriveProfile = 402;
 constexpr std::uint32_t kIoProfile = 401;
-
-std::string hex(std::uint32_t value, int digits) {
-  char text[16];
-  std::snprintf(text, sizeof text, "0x%0*X", digits, value);
-  return text;
-}
 
 }  // namespace
 
@@ -65,9 +55,9 @@ std::string describe(const CanopenEvent& event) {
   std::string text = "node " + std::to_string(event.node) + ": " + to_string(event.kind);
   switch (event.kind) {
     case CanopenEventKind::kEmergency:
-      text += " " + hex(event.code, 4) + " " +
+      text += " " + hex_text(event.code, 4) + " " +
               canopen::describe_emcy_code(static_cast<std::uint16_t>(event.code)) + " (register " +
-              hex(event.detail, 2) + ")";
+              hex_text(event.detail, 2) + ")";
       break;
     case CanopenEventKind::kNmtStateChanged:
       text += std::string(" ") + canopen::to_string(static_cast<NmtState>(event.code));
@@ -120,7 +110,13 @@ std::optional<bool> fault_transition(const CanopenEvent& event) {
   return std::nullopt;
 }
 
-CanopenIo::CanopenIo(CanBus& bus, CanConfig config) : bus_(bus), config_(std::move(config)) {
+CanopenIo::CanopenIo(CanBus& bus, CanConfig config)
+    : bus_(bus),
+      config_(std::move(config)),
+      drive_rpdos_{map_pdo(config_.drive_pdos.rpdo1), map_pdo(config_.drive_pdos.rpdo2)},
+      drive_tpdos_{map_pdo(config_.drive_pdos.tpdo1), map_pdo(config_.drive_pdos.tpdo2)},
+      io_rpdo_(map_pdo(config_.io_pdos.rpdo1)),
+      io_tpdo_(map_pdo(config_.io_pdos.tpdo1)) {
   for (std::size_t d = 0; d < kDriveCount; ++d) {
     nodes_[d].id = config_.drives[d].node_id;
     nodes_[d].timeout_ns = std::int64_t{config_.drives[d].heartbeat_timeout_ms} * 1'000'000;
@@ -311,20 +307,19 @@ void CanopenIo::handle_frame(const CanFrame& frame, std::int64_t now_ns) {
       return;
     case Route::kDriveTpdo1:
     case Route::kDriveTpdo2: {
-      const canopen::PdoMapping& mapping =
-          entry.route == Route::kDriveTpdo1 ? config_.drive_pdos.tpdo1 : config_.drive_pdos.tpdo2;
+      const MappedPdo& pdo = drive_tpdos_[entry.route == Route::kDriveTpdo1 ? 0 : 1];
       std::array<std::uint32_t, canopen::kMaxPdoEntries> values{};
-      if (!canopen::unpack_pdo(frame, mapping, std::span(values.data(), mapping.count))) {
+      if (!canopen::unpack_pdo(frame, pdo.mapping, std::span(values.data(), pdo.mapping.count))) {
         ++counters_.malformed_frames;
         return;
       }
-      for (std::uint8_t i = 0; i < mapping.count; ++i) {
-        apply_drive_signal(entry.slot, signal_of(mapping, i), values[i], now_ns);
+      for (std::uint8_t i = 0; i < pdo.mapping.count; ++i) {
+        apply_drive_signal(entry.slot, pdo.signals[i], values[i], now_ns);
       }
       return;
     }
     case Route::kIoTpdo1: {
-      const canopen::PdoMapping& mapping = config_.io_pdos.tpdo1;
+      const canopen::PdoMapping& mapping = io_tpdo_.mapping;
       std::array<std::uint32_t, canopen::kMaxPdoEntries> values{};
       if (!canopen::unpack_pdo(frame, mapping, std::span(values.data(), mapping.count))) {
         ++counters_.malformed_frames;
@@ -332,7 +327,7 @@ void CanopenIo::handle_frame(const CanFrame& frame, std::int64_t now_ns) {
       }
       IoRuntime& module = io_[entry.slot];
       for (std::uint8_t i = 0; i < mapping.count; ++i) {
-        const PdoSignal signal = signal_of(mapping, i);
+        const PdoSignal signal = io_tpdo_.signals[i];
         if (signal == PdoSignal::kDigitalInputs) {
           module.digital_inputs = static_cast<std::uint8_t>(values[i]);
         } else {
@@ -347,9 +342,15 @@ void CanopenIo::handle_frame(const CanFrame& frame, std::int64_t now_ns) {
   }
 }
 
-PdoSignal CanopenIo::signal_of(const canopen::PdoMapping& mapping, std::uint8_t entry) {
-  // The loader admitted only known objects, so every entry has its signal.
-  return find_pdo_signal(mapping.entries[entry]).value_or(PdoSignal::kCount);
+CanopenIo::MappedPdo CanopenIo::map_pdo(const canopen::PdoMapping& mapping) {
+  MappedPdo pdo;
+  pdo.mapping = mapping;
+  for (std::uint8_t i = 0; i < mapping.count; ++i) {
+    // The loader admitted only known objects, so every entry has its signal.
+    pdo.signals[i] = find_pdo_signal(mapping.entries[i]).value_or(PdoSignal::kCount);
+  }
+  pdo.cyclic = carries_cyclic_command(mapping);
+  return pdo;
 }
 
 void CanopenIo::apply_drive_signal(std::size_t slot, PdoSignal signal, std::uint32_t raw,
@@ -465,15 +466,15 @@ void CanopenIo::fill_image(InputImage& in) const {
   in.fault_reset_request = safety_ok && (safety.digital_inputs & safety_io::kFaultResetBit) != 0;
 }
 
-void CanopenIo::send_drive_rpdo(std::size_t drive_index, std::size_t rpdo,
-                                const canopen::PdoMapping& mapping, std::uint32_t cob_id,
+void CanopenIo::send_drive_rpdo(std::size_t drive_index, std::size_t rpdo, std::uint32_t cob_id,
                                 const DriveRpdoValues& command) {
+  const MappedPdo& pdo = drive_rpdos_[rpdo];
+  const canopen::PdoMapping& mapping = pdo.mapping;
   if (mapping.count == 0) return;
   std::array<std::uint32_t, canopen::kMaxPdoEntries> values{};
-  fill_drive_rpdo(mapping, command, values);
+  fill_drive_rpdo(pdo, command, values);
   DriveRuntime& drive = drives_[drive_index];
-  const bool cyclic = carries_cyclic_command(mapping);
-  if (!cyclic && drive.rpdo_sent[rpdo] && values == drive.rpdo_last[rpdo]) {
+  if (!pdo.cyclic && drive.rpdo_sent[rpdo] && values == drive.rpdo_last[rpdo]) {
     return;  // the ramps have not changed
   }
   if (bus_.send(canopen::pack_pdo(cob_id, mapping,
@@ -485,10 +486,10 @@ void CanopenIo::send_drive_rpdo(std::size_t drive_index, std::size_t rpdo,
   }
 }
 
-void CanopenIo::fill_drive_rpdo(const canopen::PdoMapping& mapping, const DriveRpdoValues& command,
+void CanopenIo::fill_drive_rpdo(const MappedPdo& pdo, const DriveRpdoValues& command,
                                 std::array<std::uint32_t, canopen::kMaxPdoEntries>& values) {
-  for (std::uint8_t i = 0; i < mapping.count; ++i) {
-    switch (signal_of(mapping, i)) {
+  for (std::uint8_t i = 0; i < pdo.mapping.count; ++i) {
+    switch (pdo.signals[i]) {
       case PdoSignal::kControlword:
         values[i] = command.controlword;
         break;
@@ -531,8 +532,8 @@ void CanopenIo::write(const OutputImage& out) {
     const std::uint32_t accel =
         acceleration_to_drive_units(static_cast<DriveId>(d), command.accel_mps2);
     const DriveRpdoValues values{controlword, to_wire(target), accel};
-    send_drive_rpdo(d, 0, config_.drive_pdos.rpdo1, node.rpdo1_cob_id, values);
-    send_drive_rpdo(d, 1, config_.drive_pdos.rpdo2, node.rpdo2_cob_id, values);
+    send_drive_rpdo(d, 0, node.rpdo1_cob_id, values);
+    send_drive_rpdo(d, 1, node.rpdo2_cob_id, values);
   }
 
   const IoScaling& scaling = config_.io_scaling;
@@ -542,10 +543,10 @@ void CanopenIo::write(const OutputImage& out) {
     return to_wire(to_analog_counts(value, units_per_count)) & 0xFFFFU;
   };
   const auto send_outputs = [&](IoModuleId module, const IoOutputs& outputs) {
-    const canopen::PdoMapping& mapping = config_.io_pdos.rpdo1;
+    const canopen::PdoMapping& mapping = io_rpdo_.mapping;
     std::array<std::uint32_t, canopen::kMaxPdoEntries> values{};
     for (std::uint8_t i = 0; i < mapping.count; ++i) {
-      const PdoSignal signal = signal_of(mapping, i);
+      const PdoSignal signal = io_rpdo_.signals[i];
       values[i] = signal == PdoSignal::kDigitalOutputs
                       ? outputs.digital
                       : outputs.analog[static_cast<std::size_t>(signal) -
@@ -689,8 +690,9 @@ bool CanopenIo::write_pdo(SdoClient& sdo, NodeId node, std::uint16_t communicati
     const SdoResult result = sdo.download(node, step.address, step.value, step.size);
     if (!result.ok()) {
       problems.push_back("node " + std::to_string(node) + ": SDO write " +
-                         hex(step.address.index, 4) + ":" + hex(step.address.subindex, 2) + " = " +
-                         hex(step.value, 8) + " failed: " + result.describe());
+                         hex_text(step.address.index, 4) + ":" +
+                         hex_text(step.address.subindex, 2) + " = " + hex_text(step.value, 8) +
+                         " failed: " + result.describe());
       return false;
     }
   }
@@ -705,11 +707,12 @@ bool CanopenIo::check_pdo_mapping(SdoClient& sdo, NodeId node, std::uint16_t map
   const auto describe = [](const canopen::PdoMapping& entries) {
     std::string text;
     for (std::uint8_t i = 0; i < entries.count; ++i) {
-      text += (i == 0 ? "" : ", ") + hex(entries.entries[i].mapping_value(), 8);
+      text += (i == 0 ? "" : ", ") + hex_text(entries.entries[i].mapping_value(), 8);
     }
     return text.empty() ? std::string("nothing") : text;
   };
-  const std::string where = "node " + std::to_string(node) + ": mapping " + hex(mapping_index, 4);
+  const std::string where =
+      "node " + std::to_string(node) + ": mapping " + hex_text(mapping_index, 4);
   canopen::PdoMapping device;
   const SdoResult count = sdo.upload(node, {mapping_index, 0});
   if (!count.ok()) {
@@ -743,6 +746,10 @@ bool CanopenIo::check_pdo_mapping(SdoClient& sdo, NodeId node, std::uint16_t map
 bool CanopenIo::configure_drive(SdoClient& sdo, std::size_t d, std::vector<std::string>& problems) {
   const DriveNodeConfig& node = config_.drives[d];
   const DrivePdoMappings& pdos = config_.drive_pdos;
+  // A cyclic RPDO takes effect at the SYNC, with every other; a ramp-only one on receipt.
+  const auto transmission = [](const MappedPdo& pdo) {
+    return pdo.cyclic ? kSynchronous : kEventDriven;
+  };
   const NodeId id = node.node_id;
   const std::string who = "drive " + std::string(config_name(static_cast<DriveId>(d))) + " (node " +
                           std::to_string(id) + ")";
@@ -752,15 +759,15 @@ bool CanopenIo::configure_drive(SdoClient& sdo, std::size_t d, std::vector<std::
     return false;
   }
   if ((device_type.value & kDeviceProfileMask) != kDriveProfile) {
-    problems.push_back(who + ": device type " + hex(device_type.value, 8) +
+    problems.push_back(who + ": device type " + hex_text(device_type.value, 8) +
                        " is not a CiA 402 drive");
     return false;
   }
   const auto write = [&](SdoAddress address, std::uint32_t value, std::uint8_t size) {
     const SdoResult result = sdo.download(id, address, value, size);
     if (!result.ok()) {
-      problems.push_back(who + ": SDO write " + hex(address.index, 4) + ":" +
-                         hex(address.subindex, 2) + " failed: " + result.describe());
+      problems.push_back(who + ": SDO write " + hex_text(address.index, 4) + ":" +
+                         hex_text(address.subindex, 2) + " failed: " + result.describe());
     }
     return result.ok();
   };
@@ -768,9 +775,9 @@ bool CanopenIo::configure_drive(SdoClient& sdo, std::size_t d, std::vector<std::
       acceleration_to_drive_units(static_cast<DriveId>(d), node.max_accel_mps2);
   const bool written =
       write({0x1017, 0}, node.heartbeat_producer_ms, 2) &&
-      write_pdo(sdo, id, 0x1400, 0x1600, node.rpdo1_cob_id, rpdo_transmission(pdos.rpdo1),
+      write_pdo(sdo, id, 0x1400, 0x1600, node.rpdo1_cob_id, transmission(drive_rpdos_[0]),
                 pdos.rpdo1, problems) &&
-      write_pdo(sdo, id, 0x1401, 0x1601, node.rpdo2_cob_id, rpdo_transmission(pdos.rpdo2),
+      write_pdo(sdo, id, 0x1401, 0x1601, node.rpdo2_cob_id, transmission(drive_rpdos_[1]),
                 pdos.rpdo2, problems) &&
       write_pdo(sdo, id, 0x1800, 0x1A00, node.tpdo1_cob_id, kSynchronous, pdos.tpdo1, problems) &&
       write_pdo(sdo, id, 0x1801, 0x1A01, node.tpdo2_cob_id, node.tpdo2_every_syncs, pdos.tpdo2,
@@ -789,9 +796,8 @@ bool CanopenIo::configure_drive(SdoClient& sdo, std::size_t d, std::vector<std::
   // The ramps just written by SDO are what a ramp-only RPDO would carry now.
   const DriveRpdoValues configured{0, 0, max_accel};
   for (std::size_t rpdo = 0; rpdo < 2; ++rpdo) {
-    const canopen::PdoMapping& mapping = rpdo == 0 ? pdos.rpdo1 : pdos.rpdo2;
-    if (!carries_cyclic_command(mapping)) {
-      fill_drive_rpdo(mapping, configured, drives_[d].rpdo_last[rpdo]);
+    if (!drive_rpdos_[rpdo].cyclic) {
+      fill_drive_rpdo(drive_rpdos_[rpdo], configured, drives_[d].rpdo_last[rpdo]);
       drives_[d].rpdo_sent[rpdo] = true;
     }
   }
@@ -809,7 +815,7 @@ bool CanopenIo::configure_io(SdoClient& sdo, std::size_t m, std::vector<std::str
     return false;
   }
   if ((device_type.value & kDeviceProfileMask) != kIoProfile) {
-    problems.push_back(who + ": device type " + hex(device_type.value, 8) +
+    problems.push_back(who + ": device type " + hex_text(device_type.value, 8) +
                        " is not a CiA 401 I/O module");
     return false;
   }

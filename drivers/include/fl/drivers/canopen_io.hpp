@@ -217,13 +217,19 @@ class CanopenIo final : public ProcessIo {
   void handle_frame(const CanFrame& frame, std::int64_t now_ns);
   void check_timeouts(std::int64_t now_ns);
   void take_send_confirmations();
-  static PdoSignal signal_of(const canopen::PdoMapping& mapping, std::uint8_t entry);
+  // A configured mapping with the signal of each entry and whether it is cyclic, worked out
+  // once at construction: the cycle packs and unpacks by them.
+  struct MappedPdo {
+    canopen::PdoMapping mapping;
+    std::array<PdoSignal, canopen::kMaxPdoEntries> signals{};
+    bool cyclic = false;  // an RPDO that goes every cycle (carries_cyclic_command)
+  };
+  static MappedPdo map_pdo(const canopen::PdoMapping& mapping);
   void apply_drive_signal(std::size_t slot, PdoSignal signal, std::uint32_t raw,
                           std::int64_t now_ns);
-  static void fill_drive_rpdo(const canopen::PdoMapping& mapping, const DriveRpdoValues& command,
+  static void fill_drive_rpdo(const MappedPdo& pdo, const DriveRpdoValues& command,
                               std::array<std::uint32_t, canopen::kMaxPdoEntries>& values);
-  void send_drive_rpdo(std::size_t drive_index, std::size_t rpdo,
-                       const canopen::PdoMapping& mapping, std::uint32_t cob_id,
+  void send_drive_rpdo(std::size_t drive_index, std::size_t rpdo, std::uint32_t cob_id,
                        const DriveRpdoValues& command);
   StartupReport run_start_up(const BusClock& clock, bool enable_drives);
   // Outside the cycle: write `out`, a cycle period, read into `in`, until done() or
@@ -247,6 +253,10 @@ class CanopenIo final : public ProcessIo {
 
   CanBus& bus_;
   CanConfig config_;
+  std::array<MappedPdo, 2> drive_rpdos_{};  // RPDO1, RPDO2
+  std::array<MappedPdo, 2> drive_tpdos_{};  // TPDO1, TPDO2
+  MappedPdo io_rpdo_{};
+  MappedPdo io_tpdo_{};
   std::array<RouteEntry, 2048> routes_{};        // by 11-bit COB-ID
   std::array<NodeRuntime, kNodeCount> nodes_{};  // drives first, then I/O modules
   std::array<DriveRuntime, kDriveCount> drives_{};
