@@ -211,19 +211,19 @@ struct LineController::Impl {
     refresh_counters();
   }
 
-  // Where a drive's part of the product path ends: the bulk belt feeds s = 0, and a
-  // multilane unit's right drive shares its left drive's section.
+  // A multilane unit's right drive moves its left drive's section (has_section()).
+  static DriveId section_owner(DriveId drive) {
+    if (drive == DriveId::kMultilane1Right) return DriveId::kMultilane1Left;
+    if (drive == DriveId::kMultilane2Right) return DriveId::kMultilane2Left;
+    return drive;
+  }
+  // Where a drive's part of the product path begins and ends: the bulk belt feeds s = 0.
   float section_end_mm(DriveId drive) const {
-    if (drive == DriveId::kBulk) return 0.0F;
-    if (drive == DriveId::kMultilane1Right) drive = DriveId::kMultilane1Left;
-    if (drive == DriveId::kMultilane2Right) drive = DriveId::kMultilane2Left;
-    return config.sections[index(drive)].end_mm;
+    return drive == DriveId::kBulk ? 0.0F : config.sections[index(section_owner(drive))].end_mm;
   }
   float section_start_mm(DriveId drive) const {
-    if (drive == DriveId::kBulk) return -std::numeric_limits<float>::infinity();
-    if (drive == DriveId::kMultilane1Right) drive = DriveId::kMultilane1Left;
-    if (drive == DriveId::kMultilane2Right) drive = DriveId::kMultilane2Left;
-    return config.sections[index(drive)].start_mm;
+    return drive == DriveId::kBulk ? -std::numeric_limits<float>::infinity()
+                                   : config.sections[index(section_owner(drive))].start_mm;
   }
   bool downstream_of_drain(DriveId drive) const {
     return section_start_mm(drive) >= drain_from_mm - kSectionJoinToleranceMm;
