@@ -6,6 +6,7 @@
 #include <ctime>
 #include <limits>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
 #include <thread>
 
@@ -45,6 +46,14 @@ std::filesystem::path default_config(const char* file) {
 
 std::filesystem::path config_or_default(const std::string& given, const char* default_file) {
   return given.empty() ? default_config(default_file) : std::filesystem::path(given);
+}
+
+std::string read_text(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error(file.string() + ": cannot open for reading");
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
 }
 
 std::optional<RunTimes> parse_run_times(const std::string& duration, const std::string& wait,

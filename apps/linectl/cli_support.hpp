@@ -35,6 +35,10 @@ std::filesystem::path default_config(const char* file);
 // The file named on the command line, or default_config(default_file) when none is.
 std::filesystem::path config_or_default(const std::string& given, const char* default_file);
 
+// A whole text file (a configuration to attach to a recording). Throws std::runtime_error
+// naming the file when it cannot be opened.
+std::string read_text(const std::filesystem::path& file);
+
 // --duration, --wait and --drain of a command that waits for a peer, runs and drains.
 struct RunTimes {
   double duration_s = 0.0;

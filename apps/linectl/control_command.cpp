@@ -14,7 +14,6 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
-#include <sstream>
 #include <thread>
 
 #include "cli_support.hpp"
@@ -515,12 +514,9 @@ int control_command(const ControlArgs& args) {
       spdlog::error("control: --record: this binary has no recording library (use linectl)");
       return 2;
     }
-    const std::filesystem::path config_path = config_or_default(args.config, "line.yaml");
-    std::ifstream config_file(config_path);
-    std::ostringstream config_text;
-    config_text << config_file.rdbuf();
     try {
-      recorder = args.record_factory(config_text.str(), args.record_path);
+      recorder = args.record_factory(read_text(config_or_default(args.config, "line.yaml")),
+                                     args.record_path);
     } catch (const std::exception& error) {
       spdlog::error("control: --record {}: {}", args.record_path, error.what());
       return 2;

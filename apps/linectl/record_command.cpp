@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <sstream>
 
 #include "cli_support.hpp"
 #include "duration.hpp"
@@ -33,14 +32,6 @@ constexpr double kNsPerS = 1e9;
 // Fillets whose centre lies farther than this outside a camera's field along travel cannot
 // reach into the frame (the longest fillet of table 3.1 is 176 mm, at most 1.05 scaled).
 constexpr double kRenderMarginMm = 100.0;
-
-std::string read_text(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  if (!in) throw std::runtime_error(file.string() + ": cannot open for reading");
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
 
 // The plant's fillets as one camera sees them (camera belt frame: x = s - mount).
 class PlantScene final : public rec::TwinScene {
