@@ -12,6 +12,9 @@ add_library(
 target_include_directories(fl_twin_dem PUBLIC ${CMAKE_CURRENT_LIST_DIR}/include)
 target_link_libraries(fl_twin_dem PUBLIC Eigen3::Eigen OpenMP::OpenMP_CXX fl_controller_config
                                   PRIVATE fl_build_flags)
+# The engine never reads errno: without this GCC guards every sqrt in the pair and bond loops
+# with a branch to the library call that would set it.
+target_compile_options(fl_twin_dem PRIVATE -fno-math-errno)
 
 if(FL_BUILD_TESTS)
   file(GLOB FL_TWIN_DEM_TEST_SOURCES CONFIGURE_DEPENDS ${CMAKE_CURRENT_LIST_DIR}/tests/dem/dem_*_test.cpp)

@@ -38,6 +38,7 @@ int main(int argc, char** argv) {
   auto sim = scenario == "bed"
                  ? race::make_bed(nx, ny, nz, threads, settle_steps)
                  : race::make_fillets(fillets, threads, scenario == "fillets_jkr", settle_steps);
+  const std::uint64_t rebuilds_before = sim->stats().neighbor_rebuilds;
   const auto start = std::chrono::steady_clock::now();
   sim->step(static_cast<std::size_t>(steps));
   const double wall_s =
@@ -47,5 +48,9 @@ int main(int argc, char** argv) {
               sim->state().bonds.size() - sim->stats().broken_bonds, sim->active_thread_count(),
               steps, wall_s, n * steps / wall_s,
               2.0 * static_cast<double>(sim->stats().touching_pairs) / n);
+  // stderr, so that the TSV line stays one line: how often the Verlet list was rebuilt
+  std::fprintf(stderr, "%s: %llu neighbour rebuilds in %d timed steps\n", tag.c_str(),
+               static_cast<unsigned long long>(sim->stats().neighbor_rebuilds - rebuilds_before),
+               steps);
   return 0;
 }

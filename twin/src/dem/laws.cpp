@@ -20,25 +20,34 @@ const double kSqrtFiveSixths = std::sqrt(5.0 / 6.0);
 // Per step the plane turns by a tiny angle, so the length correction 1/sqrt(1 - r) with
 // r = (v.n)^2 / |v|^2 is taken from its series 1 + r/2 + 3r^2/8 while r < 1e-4 (the next
 // term, 5r^3/16, is under 3.2e-13 relative): no square root in the bond and contact loops,
-// where it cost about 7 % of the bonded benchmark's time (docs/benchmarks.md).
-inline void rotate_into_tangent_plane(Vec3& vector, const Vec3& normal) {
+// where it cost about 7 % of the bonded benchmark's time (docs/benchmarks.md). Forced inline:
+// GCC kept it out of line in the bond batch, which then spilled the bond's geometry to the
+// stack (9 % of the bonded race in the call alone).
+[[gnu::always_inline]] inline void rotate_into_tangent_plane(Vec3& vector, const Vec3& normal) {
   constexpr double kSeriesLimit = 1e-4;
-  const double old_squared = vector.squaredNorm();
+  // Component by component: written with Eigen expressions, GCC moved the subtraction out of
+  // line in the bond batch.
+  double x = vector.x();
+  double y = vector.y();
+  double z = vector.z();
+  const double old_squared = x * x + y * y + z * z;
   if (old_squared == 0.0) {
     return;
   }
-  const double along = vector.dot(normal);
-  vector -= along * normal;
+  const double along = x * normal.x() + y * normal.y() + z * normal.z();
+  x -= along * normal.x();
+  y -= along * normal.y();
+  z -= along * normal.z();
   const double removed = along * along;
+  double scale = 1.0;
   if (removed < kSeriesLimit * old_squared) {
     const double r = removed / old_squared;
-    vector *= 1.0 + r * (0.5 + 0.375 * r);
-    return;
+    scale = 1.0 + r * (0.5 + 0.375 * r);
+  } else {
+    const double new_squared = x * x + y * y + z * z;
+    if (new_squared > 0.0) scale = std::sqrt(old_squared / new_squared);
   }
-  const double new_squared = vector.squaredNorm();
-  if (new_squared > 0.0) {
-    vector *= std::sqrt(old_squared / new_squared);
-  }
+  vector = Vec3(x * scale, y * scale, z * scale);
 }
 
 // Eq. 3.1 with the damping of eqs. 3.2-3.3 (EDEM / LIGGGHTS Hertz-Mindlin):
@@ -208,7 +217,10 @@ class Jkr final : public ContactLaw {
 // centres separate beyond the sum of the contact radii.
 // The batch loop shared by all bond laws: bond geometry at the bond point (between the centres
 // in proportion to the radii), the law's per-bond update, forces and torques on both particles.
-template <typename PerBond>
+// kMoments: whether the law returns bending/twisting moments (the bpm family does not, so
+// their zero moments are not added per bond). The geometry is written component by component
+// so that it stays in registers (with Eigen expressions GCC spilled it to the stack).
+template <bool kMoments = true, typename PerBond>
 bool run_bond_batch(const BondBatch& b, PerBond&& per_bond) {
   bool broke = false;
   for (std::uint32_t k = b.begin; k < b.end; ++k) {
@@ -217,18 +229,32 @@ bool run_bond_batch(const BondBatch& b, PerBond&& per_bond) {
     const Bond& bond = b.bonds[k];
     const std::uint32_t i = bond.i;
     const std::uint32_t j = bond.j;
-    const Vec3 d = b.position_m[i] - b.position_m[j];
+    const Vec3& position_i = b.position_m[i];
+    const Vec3& position_j = b.position_m[j];
+    const double dx = position_i.x() - position_j.x();
+    const double dy = position_i.y() - position_j.y();
+    const double dz = position_i.z() - position_j.z();
     BondGeometry g;
-    g.distance_m = d.norm();
-    g.normal = d * (1.0 / g.distance_m);
+    g.distance_m = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const double inverse_distance = 1.0 / g.distance_m;
+    const double nx = dx * inverse_distance;
+    const double ny = dy * inverse_distance;
+    const double nz = dz * inverse_distance;
+    g.normal = Vec3(nx, ny, nz);
     const double ri = b.radius_m[i];
     const double rj = b.radius_m[j];
     const double arm_i = g.distance_m * ri / (ri + rj);
     const double arm_j = g.distance_m - arm_i;
-    g.relative_velocity_m_per_s =
-        b.velocity_m_per_s[i] - b.velocity_m_per_s[j] -
-        (arm_i * b.angular_velocity_rad_per_s[i] + arm_j * b.angular_velocity_rad_per_s[j])
-            .cross(g.normal);
+    const Vec3& spin_i = b.angular_velocity_rad_per_s[i];
+    const Vec3& spin_j = b.angular_velocity_rad_per_s[j];
+    const double ox = arm_i * spin_i.x() + arm_j * spin_j.x();
+    const double oy = arm_i * spin_i.y() + arm_j * spin_j.y();
+    const double oz = arm_i * spin_i.z() + arm_j * spin_j.z();
+    const Vec3& velocity_i = b.velocity_m_per_s[i];
+    const Vec3& velocity_j = b.velocity_m_per_s[j];
+    g.relative_velocity_m_per_s = Vec3(velocity_i.x() - velocity_j.x() - (oy * nz - oz * ny),
+                                       velocity_i.y() - velocity_j.y() - (oz * nx - ox * nz),
+                                       velocity_i.z() - velocity_j.z() - (ox * ny - oy * nx));
     g.rest_length_m = bond.rest_length_m;
     g.bond_radius_m = bond.bond_radius_m;
     g.break_distance_m = bond.break_distance_m;
@@ -240,12 +266,20 @@ bool run_bond_batch(const BondBatch& b, PerBond&& per_bond) {
       broke = true;
       continue;
     }
-    const Vec3 force = f.normal_force_n * g.normal + f.shear_force_n;
-    const Vec3 t_cross_n = f.shear_force_n.cross(g.normal);
+    const double fn = f.normal_force_n;
+    const Vec3& shear = f.shear_force_n;
+    const Vec3 force(fn * nx + shear.x(), fn * ny + shear.y(), fn * nz + shear.z());
+    const Vec3 t_cross_n(shear.y() * nz - shear.z() * ny, shear.z() * nx - shear.x() * nz,
+                         shear.x() * ny - shear.y() * nx);
     b.force_n[i] += force;
     b.force_n[j] -= force;
-    b.torque_nm[i] += arm_i * t_cross_n + f.torque_on_i_nm;
-    b.torque_nm[j] += arm_j * t_cross_n + f.torque_on_j_nm;
+    if constexpr (kMoments) {
+      b.torque_nm[i] += arm_i * t_cross_n + f.torque_on_i_nm;
+      b.torque_nm[j] += arm_j * t_cross_n + f.torque_on_j_nm;
+    } else {
+      b.torque_nm[i] += arm_i * t_cross_n;
+      b.torque_nm[j] += arm_j * t_cross_n;
+    }
   }
   return broke;
 }
@@ -361,9 +395,11 @@ class BondedParticleModel final : public BondLaw {
   }
 
   bool compute_batch(const BondBatch& batch) const override {
-    return run_bond_batch(batch, [this](const BondGeometry& g, BondState& state, BondForce& f) {
-      update(g, state, f);
-    });
+    // update() sets no moments (the bpm has none)
+    return run_bond_batch<false>(batch,
+                                 [this](const BondGeometry& g, BondState& state, BondForce& f) {
+                                   update(g, state, f);
+                                 });
   }
 
   [[nodiscard]] double elastic_energy_j(const BondState& state, const Bond& bond) const override {
@@ -399,14 +435,22 @@ class BondedParticleModel final : public BondLaw {
     }
     const double area = area_m2(g.bond_radius_m);
     const double scale = grading_.scale(g.thickness_m);
-    const double normal_velocity = g.relative_velocity_m_per_s.dot(g.normal);
-    const Vec3 tangential_velocity = g.relative_velocity_m_per_s - normal_velocity * g.normal;
     state.normal_force_n = normal_.force_n(g, state, normal_stiffness_ * scale * area, area);
     rotate_into_tangent_plane(state.shear_force_n, g.normal);
-    state.shear_force_n -= shear_stiffness_ * scale * area * g.timestep_s * tangential_velocity;
+    // dF_t = -S_t A dt v_t, with v_t the relative velocity less its normal part (component by
+    // component, as in run_bond_batch, to keep it in registers)
+    const Vec3& n = g.normal;
+    const Vec3& v = g.relative_velocity_m_per_s;
+    const double normal_velocity = v.x() * n.x() + v.y() * n.y() + v.z() * n.z();
+    const double shear_gain = shear_stiffness_ * scale * area * g.timestep_s;
+    Vec3& shear = state.shear_force_n;
+    shear = Vec3(shear.x() - shear_gain * (v.x() - normal_velocity * n.x()),
+                 shear.y() - shear_gain * (v.y() - normal_velocity * n.y()),
+                 shear.z() - shear_gain * (v.z() - normal_velocity * n.z()));
     const double shear_limit_n = shear_strength_ * area;
     if (-state.normal_force_n > normal_strength_ * area ||
-        state.shear_force_n.squaredNorm() > shear_limit_n * shear_limit_n) {
+        shear.x() * shear.x() + shear.y() * shear.y() + shear.z() * shear.z() >
+            shear_limit_n * shear_limit_n) {
       state.broken = true;
       return;
     }
