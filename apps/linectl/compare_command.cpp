@@ -261,15 +261,33 @@ int calibrate_command(const CalibrateArgs& args) {
         std::isfinite(s.interval_low) && std::isfinite(s.interval_high)
             ? fmt::format("95 % interval {:.4g} .. {:.4g}", s.interval_low, s.interval_high)
             : std::string("no interval: the moves do not bound it");
+    const std::string joint =
+        std::isfinite(s.joint_interval_low) && std::isfinite(s.joint_interval_high)
+            ? fmt::format("joint {:.4g} .. {:.4g}", s.joint_interval_low, s.joint_interval_high)
+            : std::string("no joint interval");
     sensitivity += fmt::format(
-        "  {}: at {:.4g} down to {:.4g}: {}, up to {:.4g}: {} -> {}; {}\n", parameters[p].address,
-        result.best[p], s.value_down, rms_text(s.rmse_down), s.value_up, rms_text(s.rmse_up),
-        s.determined ? "determined" : "NOT determined by this dataset", interval);
+        "  {}: at {:.4g} down to {:.4g}: {}, up to {:.4g}: {} -> {}; {}; {}\n",
+        parameters[p].address, result.best[p], s.value_down, rms_text(s.rmse_down), s.value_up,
+        rms_text(s.rmse_up), s.determined ? "determined" : "NOT determined by this dataset",
+        interval, joint);
   }
   spdlog::info(
-      "sensitivity, RMS (SI) with each parameter alone moved a tenth of its box, and its 95 % "
-      "interval with the others held (conditional):\n{}",
+      "sensitivity, RMS (SI) with each parameter alone moved a tenth of its box, its 95 % "
+      "interval with the others held (conditional) and with them re-fitted (joint):\n{}",
       sensitivity);
+  if (parameters.size() > 1 && result.correlation.empty()) {
+    spdlog::warn(
+        "the parameters are not determined together: the curvature of the error is not positive "
+        "definite, so some combination of them leaves the fit unchanged (calibrate fewer, or "
+        "add a dataset that separates them)");
+  } else {
+    for (std::size_t p = 0; p < result.correlation.size(); ++p) {
+      for (std::size_t q = p + 1; q < result.correlation.size(); ++q) {
+        spdlog::info("correlation {} / {}: {:+.3f}", parameters[p].address, parameters[q].address,
+                     result.correlation[p][q]);
+      }
+    }
+  }
   try {
     for (const fs::path& plot : write_sensitivity_plots(result, out)) {
       spdlog::info("sensitivity plot: {}", plot.string());

@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <array>
 #include <charconv>
@@ -207,13 +208,14 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
                                                 const std::vector<double>& best_unit,
                                                 const Calibration& result,
                                                 const std::vector<std::vector<double>>& unit_points,
-                                                int slices, bool factorial, int threads) {
+                                                int slices, bool factorial, int threads,
+                                                std::vector<std::vector<double>>& correlation) {
   const std::size_t dimensions = parameters.size();
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  // The moves: 2 per parameter, run on every core; a move past the box is not made.
+  // The moves, run on every core: 2 per parameter (a move past the box is not made), then one
+  // per pair of parameters moved together, each the way its own up move went where it could.
   std::vector<std::vector<double>> moves;
   std::vector<bool> made;  // inside the box: evaluated and judged
-  std::vector<double> moved_rmse(2 * dimensions, nan);
   for (std::size_t p = 0; p < dimensions; ++p) {
     for (const double direction : {-1.0, 1.0}) {
       std::vector<double> point = best_unit;
@@ -222,6 +224,18 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
       moves.push_back(std::move(point));
     }
   }
+  std::vector<int> sign(dimensions);
+  for (std::size_t p = 0; p < dimensions; ++p) sign[p] = made[2 * p + 1] ? 1 : -1;
+  for (std::size_t p = 0; p < dimensions; ++p) {
+    for (std::size_t q = p + 1; q < dimensions; ++q) {
+      std::vector<double> point = best_unit;
+      point[p] += sign[p] * kSensitivityStep;
+      point[q] += sign[q] * kSensitivityStep;
+      made.push_back(point[p] >= 0.0 && point[p] <= 1.0 && point[q] >= 0.0 && point[q] <= 1.0);
+      moves.push_back(std::move(point));
+    }
+  }
+  std::vector<double> moved_rmse(moves.size(), nan);
   model_tests::parallel_for(
       moves.size(), std::max(1, threads),
       [&](std::size_t k) {
@@ -281,6 +295,30 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
       s.main_effect_rmse.push_back(count[slice] > 0 ? sum[slice] / count[slice] : nan);
     }
   }
+
+  // The joint intervals from the whole curvature matrix.
+  const auto rss = [&](double rmse) { return n * rmse * rmse; };
+  std::vector<double> rss_down(dimensions);
+  std::vector<double> rss_up(dimensions);
+  for (std::size_t p = 0; p < dimensions; ++p) {
+    rss_down[p] = rss(moved_rmse[2 * p]);
+    rss_up[p] = rss(moved_rmse[2 * p + 1]);
+  }
+  std::vector<double> rss_pairs;
+  for (std::size_t k = 2 * dimensions; k < moves.size(); ++k)
+    rss_pairs.push_back(rss(moved_rmse[k]));
+  const detail::JointIntervals joint =
+      detail::joint_intervals(detail::curvature_matrix(rss_down, rss_up, rss_pairs, sign,
+                                                       rss(result.rmse), kSensitivityStep),
+                              best_unit, threshold);
+  for (std::size_t p = 0; p < dimensions; ++p) {
+    ParameterSensitivity& s = out[p];
+    s.joint_interval_low = s.joint_interval_high = nan;
+    if (joint.intervals.empty()) continue;
+    s.joint_interval_low = from_unit(parameters[p], std::max(0.0, joint.intervals[p].first));
+    s.joint_interval_high = from_unit(parameters[p], std::min(1.0, joint.intervals[p].second));
+  }
+  correlation = joint.correlation;
   return out;
 }
 
@@ -301,6 +339,77 @@ std::pair<double, double> detail::quadratic_interval(double rss_down, double rss
   if (!(curvature > 0.0)) return {nan, nan};
   const double half_width = std::sqrt(threshold / curvature);
   return {u_best - half_width, u_best + half_width};
+}
+
+std::vector<std::vector<double>> detail::curvature_matrix(const std::vector<double>& rss_down,
+                                                          const std::vector<double>& rss_up,
+                                                          const std::vector<double>& rss_pairs,
+                                                          const std::vector<int>& sign,
+                                                          double rss_best, double step) {
+  const std::size_t dimensions = rss_down.size();
+  if (rss_up.size() != dimensions || sign.size() != dimensions ||
+      rss_pairs.size() != dimensions * (dimensions - 1) / 2 || !std::isfinite(rss_best) ||
+      !(step > 0.0)) {
+    return {};
+  }
+  std::vector<std::vector<double>> a(dimensions, std::vector<double>(dimensions, 0.0));
+  // rss of parameter p moved alone the way the pair moves go
+  std::vector<double> rss_signed(dimensions);
+  for (std::size_t p = 0; p < dimensions; ++p) {
+    const double down = rss_down[p];
+    const double up = rss_up[p];
+    if (std::isfinite(down) && std::isfinite(up)) {
+      a[p][p] = (down - 2.0 * rss_best + up) / (2.0 * step * step);
+    } else if (std::isfinite(down) || std::isfinite(up)) {
+      a[p][p] = ((std::isfinite(down) ? down : up) - rss_best) / (step * step);
+    } else {
+      return {};
+    }
+    rss_signed[p] = sign[p] > 0 ? up : down;
+    if (!std::isfinite(rss_signed[p])) return {};
+  }
+  // rss(sp h, sq h) - rss(sp h) - rss(sq h) + rss_best = 2 A_pq sp sq h^2
+  std::size_t k = 0;
+  for (std::size_t p = 0; p < dimensions; ++p) {
+    for (std::size_t q = p + 1; q < dimensions; ++q, ++k) {
+      if (!std::isfinite(rss_pairs[k])) return {};
+      const double mixed = rss_pairs[k] - rss_signed[p] - rss_signed[q] + rss_best;
+      a[p][q] = a[q][p] = mixed * sign[p] * sign[q] / (2.0 * step * step);
+    }
+  }
+  return a;
+}
+
+detail::JointIntervals detail::joint_intervals(const std::vector<std::vector<double>>& curvature,
+                                               const std::vector<double>& u_best,
+                                               double threshold) {
+  const std::size_t dimensions = curvature.size();
+  if (dimensions == 0 || u_best.size() != dimensions || !(threshold > 0.0)) return {};
+  Eigen::MatrixXd a(dimensions, dimensions);
+  for (std::size_t p = 0; p < dimensions; ++p) {
+    if (curvature[p].size() != dimensions) return {};
+    for (std::size_t q = 0; q < dimensions; ++q) {
+      a(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(q)) = curvature[p][q];
+    }
+  }
+  if (!a.allFinite()) return {};
+  const Eigen::LLT<Eigen::MatrixXd> cholesky(a);
+  if (cholesky.info() != Eigen::Success) return {};
+  const Eigen::MatrixXd inverse = cholesky.solve(Eigen::MatrixXd::Identity(a.rows(), a.cols()));
+  // Positive definite by rounding only (a trade-off the moves cannot resolve): no interval.
+  if (!inverse.allFinite() || (inverse.diagonal().array() <= 0.0).any()) return {};
+  JointIntervals out;
+  out.correlation.assign(dimensions, std::vector<double>(dimensions, 0.0));
+  for (std::size_t p = 0; p < dimensions; ++p) {
+    const auto pi = static_cast<Eigen::Index>(p);
+    const double half_width = std::sqrt(threshold * inverse(pi, pi));
+    out.intervals.emplace_back(u_best[p] - half_width, u_best[p] + half_width);
+    for (std::size_t q = 0; q < dimensions; ++q) {
+      const auto qi = static_cast<Eigen::Index>(q);
+      out.correlation[p][q] = inverse(pi, qi) / std::sqrt(inverse(pi, pi) * inverse(qi, qi));
+    }
+  }
+  return out;
 }
 
 Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& base,
@@ -392,8 +501,9 @@ Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& b
   const bool factorial = options.design == DesignKind::kFullFactorial;
   const int slices = factorial ? std::max(1, options.factorial_levels) : 4;
   result.sensitivity = sensitivities(evaluator, parameters, x, result, unit_points, slices,
-                                     factorial, options.threads);
-  result.evaluations += static_cast<int>(2 * parameters.size());
+                                     factorial, options.threads, result.correlation);
+  result.evaluations +=
+      static_cast<int>(2 * parameters.size() + parameters.size() * (parameters.size() - 1) / 2);
   spdlog::info("calibrate: RMS {:.4g} -> {:.4g} (SI) in {} twin evaluations", result.base_rmse,
                result.rmse, result.evaluations);
   return result;
@@ -430,9 +540,13 @@ std::string calibration_json(const Calibration& calibration) {
           {"rmse_up_si", number(s.rmse_up)},
           {"determined", s.determined},
           {"main_effect_rmse_si", main_effect},
-          {"interval_95", {number(s.interval_low), number(s.interval_high)}}};
+          {"interval_95", {number(s.interval_low), number(s.interval_high)}},
+          {"joint_interval_95", {number(s.joint_interval_low), number(s.joint_interval_high)}}};
     }
   }
+  // empty (null) when the parameters are not determined together
+  out["correlation"] = calibration.correlation.empty() ? nlohmann::json(nullptr)
+                                                       : nlohmann::json(calibration.correlation);
   out["design"] = nlohmann::json::array();
   for (const DesignRun& run : calibration.design) {
     nlohmann::json point{{"values", run.values}};
@@ -494,6 +608,11 @@ std::vector<std::filesystem::path> write_sensitivity_plots(const Calibration& ca
     for (const double bound : {s.interval_low, s.interval_high}) {
       if (std::isfinite(bound)) {
         plot.references.push_back({.vertical = true, .value = bound, .label = "95 % interval"});
+      }
+    }
+    for (const double bound : {s.joint_interval_low, s.joint_interval_high}) {
+      if (std::isfinite(bound)) {
+        plot.references.push_back({.vertical = true, .value = bound, .label = "95 % joint"});
       }
     }
     if (calibration.noise_si > 0.0) {

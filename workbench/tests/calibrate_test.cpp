@@ -111,6 +111,82 @@ TEST(Calibrate, AddressesSetEveryLawTheyNameAndNothingElse) {
   }
 }
 
+// The curvature matrix from the moves of an exact quadratic bowl rss(u) = 100 + d^T A d,
+// d = u - u0, in three parameters: the finite differences are exact for a quadratic, so A comes
+// back to rounding. Parameter 1 sits 0.05 below the top of its box, so its up move is not made
+// and the pairs move it down (sign -1).
+TEST(Calibrate, CurvatureMatrixOfAQuadraticBowl) {
+  const std::vector<std::vector<double>> a = {
+      {400.0, 300.0, 0.0}, {300.0, 400.0, 100.0}, {0.0, 100.0, 200.0}};
+  const std::vector<double> u0 = {0.5, 0.95, 0.3};
+  const auto rss = [&](const std::vector<double>& u) {
+    double sum = 100.0;
+    for (std::size_t p = 0; p < 3; ++p) {
+      for (std::size_t q = 0; q < 3; ++q) sum += (u[p] - u0[p]) * a[p][q] * (u[q] - u0[q]);
+    }
+    return sum;
+  };
+  constexpr double kStep = 0.1;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<int> sign = {1, -1, 1};
+  std::vector<double> down(3);
+  std::vector<double> up(3);
+  for (std::size_t p = 0; p < 3; ++p) {
+    std::vector<double> u = u0;
+    u[p] -= kStep;
+    down[p] = rss(u);
+    u[p] += 2.0 * kStep;
+    up[p] = u[p] <= 1.0 ? rss(u) : nan;
+  }
+  std::vector<double> pairs;
+  for (std::size_t p = 0; p < 3; ++p) {
+    for (std::size_t q = p + 1; q < 3; ++q) {
+      std::vector<double> u = u0;
+      u[p] += sign[p] * kStep;
+      u[q] += sign[q] * kStep;
+      pairs.push_back(rss(u));
+    }
+  }
+  const auto curvature = detail::curvature_matrix(down, up, pairs, sign, rss(u0), kStep);
+  ASSERT_EQ(curvature.size(), 3U);
+  for (std::size_t p = 0; p < 3; ++p) {
+    for (std::size_t q = 0; q < 3; ++q) EXPECT_NEAR(curvature[p][q], a[p][q], 1e-9) << p << q;
+  }
+  // A pair the twin refused: no matrix, so no joint interval is made up.
+  pairs[1] = nan;
+  EXPECT_TRUE(detail::curvature_matrix(down, up, pairs, sign, rss(u0), kStep).empty());
+}
+
+// Two parameters that trade off, A = [[400, 300], [300, 400]], threshold 16: alone each is
+// held to sqrt(16 / 400) = 0.2 (conditional), together to sqrt(16 (A^-1)_00) with
+// (A^-1)_00 = 400 / (400^2 - 300^2), 0.302; their correlation is -300 / 400.
+TEST(Calibrate, JointIntervalsWidenWhereParametersTradeOff) {
+  constexpr double kThreshold = 16.0;
+  const detail::JointIntervals joint =
+      detail::joint_intervals({{400.0, 300.0}, {300.0, 400.0}}, {0.5, 0.4}, kThreshold);
+  ASSERT_EQ(joint.intervals.size(), 2U);
+  const double half_width = std::sqrt(kThreshold * 400.0 / (400.0 * 400.0 - 300.0 * 300.0));
+  EXPECT_NEAR(joint.intervals[0].first, 0.5 - half_width, 1e-12);
+  EXPECT_NEAR(joint.intervals[0].second, 0.5 + half_width, 1e-12);
+  EXPECT_NEAR(joint.intervals[1].first, 0.4 - half_width, 1e-12);
+  EXPECT_GT(half_width, 1.5 * std::sqrt(kThreshold / 400.0));
+  ASSERT_EQ(joint.correlation.size(), 2U);
+  EXPECT_NEAR(joint.correlation[0][1], -0.75, 1e-12);
+  EXPECT_NEAR(joint.correlation[1][0], -0.75, 1e-12);
+  EXPECT_NEAR(joint.correlation[0][0], 1.0, 1e-12);
+  // Independent parameters: the joint interval is the conditional one.
+  const detail::JointIntervals independent =
+      detail::joint_intervals({{400.0, 0.0}, {0.0, 100.0}}, {0.5, 0.5}, kThreshold);
+  ASSERT_EQ(independent.intervals.size(), 2U);
+  EXPECT_NEAR(independent.intervals[1].second, 0.5 + std::sqrt(kThreshold / 100.0), 1e-12);
+  // A saddle or a valley of equal error (a combination the data cannot see): none at all.
+  EXPECT_TRUE(detail::joint_intervals({{400.0, 500.0}, {500.0, 400.0}}, {0.5, 0.5}, kThreshold)
+                  .intervals.empty());
+  EXPECT_TRUE(
+      detail::joint_intervals({{1.0, 1.0}, {1.0, 1.0}}, {0.5, 0.5}, kThreshold).intervals.empty());
+  EXPECT_TRUE(detail::joint_intervals({}, {}, kThreshold).intervals.empty());
+}
+
 // The interval of an exact parabola about the calibrated point, rss(u) = 100 + 400 (u - 0.5)^2,
 // sampled at 0.4, 0.5 and 0.6: half width sqrt(3.84 / 400) = 0.098, from both moves or one.
 TEST(Calibrate, QuadraticIntervalOfAParabola) {
@@ -157,11 +233,64 @@ TEST(Calibrate, RecoversTheBondStiffnessOfACompressionDataset) {
   EXPECT_NEAR(result.best.front(), kTruthStiffness, 0.02 * kTruthStiffness);
   EXPECT_GT(result.base_rmse, 5.0 * test::kNoiseN);  // the base model fails it
   EXPECT_LT(result.rmse, 1.2 * test::kNoiseN);       // the calibrated one sits at the noise
+  // One parameter: nothing to re-fit, so the joint interval is the conditional one.
+  const ParameterSensitivity& alone = result.sensitivity.front();
+  EXPECT_NEAR(alone.joint_interval_low, alone.interval_low, 1e-9 * alone.interval_low);
+  EXPECT_NEAR(alone.joint_interval_high, alone.interval_high, 1e-9 * alone.interval_high);
+  ASSERT_EQ(result.correlation.size(), 1U);
+  EXPECT_DOUBLE_EQ(result.correlation[0][0], 1.0);
   // The best design point is no better than the fit.
   const auto best_design =
       std::min_element(result.design.begin(), result.design.end(),
                        [](const DesignRun& a, const DesignRun& b) { return a.rmse < b.rmse; });
   EXPECT_LE(result.rmse, best_design->rmse);
+}
+
+TEST(Calibrate, JointIntervalShowsTheTradeOffTheConditionalOneHides) {
+  // A compression pressed by the bonds: the normal bond force is k_n A (d - d0) with
+  // A = pi (disk_scale R)^2, so a stiffer bond on a smaller disk presses the same. Held alone,
+  // each parameter is pinned by the 0.01 N noise; re-fitted together they slide along that
+  // valley (only the shear bonds, k_t A, tell them apart a little). The truth is 1.8 times
+  // appendix B's stiffness at its disk scale 1.
+  GeneratorOptions options;
+  options.effect = "none";
+  options.force_noise_n = test::kNoiseN;
+  options.common = test::base_model();
+  options.common.base_spec = with_calibrated(
+      options.common.base_spec, {{"bond.normal_stiffness_n_per_m3", 1.0, 2.0, false}}, {1.8e6});
+  const Dataset data = generate_dataset(options).dataset;
+  CalibrationOptions calibration;
+  calibration.hammersley_points = 8;
+  calibration.max_local_evaluations = 20;
+  const Calibration result =
+      calibrate(data, test::base_model(),
+                {parse_calibrated_parameter("bond.normal_stiffness_n_per_m3=3e5:1e7:log"),
+                 parse_calibrated_parameter("bond.bonded_disk_scale=0.5:1.5")},
+                calibration);
+  ASSERT_EQ(result.sensitivity.size(), 2U);
+  // The fit lands somewhere on the valley: at the noise, with k_n s^2 at the truth's 1.8e6
+  // (2 %: the shear bonds' small part and the fit's tolerance).
+  EXPECT_LT(result.rmse, 1.2 * test::kNoiseN);
+  EXPECT_NEAR(result.best[0] * result.best[1] * result.best[1], 1.8e6, 0.02 * 1.8e6);
+  for (const ParameterSensitivity& s : result.sensitivity) {
+    // Alone, each looks determined, with a narrow interval...
+    EXPECT_TRUE(s.determined);
+    ASSERT_TRUE(std::isfinite(s.interval_low) && std::isfinite(s.interval_high));
+    // ...together they are not: no joint interval, or one at least three times as wide.
+    if (std::isfinite(s.joint_interval_low) && std::isfinite(s.joint_interval_high)) {
+      EXPECT_GT(s.joint_interval_high - s.joint_interval_low,
+                3.0 * (s.interval_high - s.interval_low));
+    }
+  }
+  // Strongly anti-correlated (k_n up, disk down), or not determined together at all.
+  if (!result.correlation.empty()) {
+    EXPECT_LT(result.correlation[0][1], -0.9);
+  }
+  // The pair move is one more twin run: 1 base + 8 design + local fit + 4 single + 1 pair.
+  EXPECT_GE(result.evaluations, 1 + 8 + 4 + 1);
+  const nlohmann::json json = nlohmann::json::parse(calibration_json(result));
+  EXPECT_EQ(json["correlation"].is_null(), result.correlation.empty());
+  EXPECT_EQ(json["parameters"][0]["sensitivity"]["joint_interval_95"].size(), 2U);
 }
 
 TEST(Calibrate, SensitivitySaysWhichParametersTheDataDetermine) {

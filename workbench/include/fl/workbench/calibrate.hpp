@@ -81,6 +81,14 @@ struct ParameterSensitivity {
   // not bound it (no upward curvature, no finite move).
   double interval_low = 0.0;
   double interval_high = 0.0;
+  // The joint (marginal) 95 % interval: the same threshold, with every other parameter
+  // re-fitted along the way, from the whole curvature matrix of the residual sum of squares
+  // (the moves above plus one move of each pair of parameters together). Wider than the
+  // conditional one where parameters trade off (k_n against the bond's disk scale in a
+  // compression); NaN for every parameter when the matrix is not positive definite: then the
+  // data do not pin the parameters down together, whatever each alone says.
+  double joint_interval_low = 0.0;
+  double joint_interval_high = 0.0;
   // Design points by slice of the box (factorial: one per level; Hammersley: quarters), the
   // mean RMS of those the twin ran; NaN for a slice without any. The values: each slice's
   // level or middle, in the parameter's unit.
@@ -100,6 +108,9 @@ struct Calibration {
   int evaluations = 0;                            // twin evaluations in all (every trial each)
   std::size_t samples = 0;                        // rows of the judged channel over every trial
   std::vector<ParameterSensitivity> sensitivity;  // one per parameter
+  // Correlation of the calibrated parameters (search coordinates), row by row, from the
+  // inverse curvature matrix; empty when it is not positive definite (see the joint interval).
+  std::vector<std::vector<double>> correlation;
 };
 
 // The spec with each parameter set to its value. Throws std::invalid_argument naming the
@@ -137,6 +148,26 @@ namespace detail {
 // stiffness on a log scale). Returns {NaN, NaN} without upward curvature.
 std::pair<double, double> quadratic_interval(double rss_down, double rss_best, double rss_up,
                                              double u_best, double step, double threshold);
+
+// The curvature matrix A of rss(u) ~ rss_best + (u - u0)^T A (u - u0) from the moves, in the
+// search coordinate: rss_down/rss_up per parameter as quadratic_interval takes them, and per
+// pair p < q (row by row: (0,1), (0,2), ..., (1,2), ...) the rss with both moved together, p
+// by sign[p] step and q by sign[q] step, sign +1 where p's up move was made, else -1. Exact for
+// a quadratic. Returns an empty matrix when a needed value is not finite.
+std::vector<std::vector<double>> curvature_matrix(const std::vector<double>& rss_down,
+                                                  const std::vector<double>& rss_up,
+                                                  const std::vector<double>& rss_pairs,
+                                                  const std::vector<int>& sign, double rss_best,
+                                                  double step);
+
+// Joint 95 % intervals (in u) and the correlation matrix from A: half width
+// sqrt(threshold (A^-1)_pp) about u0. Empty results when A is empty or not positive definite.
+struct JointIntervals {
+  std::vector<std::pair<double, double>> intervals;
+  std::vector<std::vector<double>> correlation;
+};
+JointIntervals joint_intervals(const std::vector<std::vector<double>>& curvature,
+                               const std::vector<double>& u_best, double threshold);
 
 }  // namespace detail
 
