@@ -396,10 +396,8 @@ class BondedParticleModel final : public BondLaw {
 
   bool compute_batch(const BondBatch& batch) const override {
     // update() sets no moments (the bpm has none)
-    return run_bond_batch<false>(batch,
-                                 [this](const BondGeometry& g, BondState& state, BondForce& f) {
-                                   update(g, state, f);
-                                 });
+    return run_bond_batch<false>(batch, [this](const BondGeometry& g, BondState& state,
+                                               BondForce& f) { update(g, state, f); });
   }
 
   [[nodiscard]] double elastic_energy_j(const BondState& state, const Bond& bond) const override {
