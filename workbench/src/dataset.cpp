@@ -99,6 +99,11 @@ ExperimentSchema make_schema(ExperimentType type) {
       // run; 600 is the twin scene's limit).
       schema.conditions.push_back(
           {"fill", Kind::kNumber, Quantity::kDimensionless, 1.0, 600.0, {}, false});
+      // Fillets dropped into the hopper per second while it runs, as the line's supply feeds
+      // the mailbox: the outflow then settles to a steady state (up to 20 a second, four
+      // times the line's 2.4 to 5 fillets a second at the takt).
+      schema.conditions.push_back(
+          {"feed_rate", Kind::kNumber, Quantity::kRate, 0.0, 20.0, {}, false});
       break;
   }
   return schema;

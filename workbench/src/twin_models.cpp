@@ -304,7 +304,8 @@ TwinBulkFlowModel::TwinBulkFlowModel(model_tests::CommonParams common, BulkFlowS
 std::string TwinBulkFlowModel::describe() const {
   std::ostringstream text;
   text << "DEM twin, mailbox hopper of " << settings_.scene.feeder.initial_fill
-       << " bonded fillets of " << common_.sub_particle_radius_m * 1e3
+       << " bonded fillets (a trial's fill and feed_rate conditions change it) of "
+       << common_.sub_particle_radius_m * 1e3
        << " mm sub-particles over the bulk belt; mass under the gate over " << settings_.measure_s
        << " s; fillet-equipment laws:" << equipment_chain_text(common_.base_spec);
   return text.str();
@@ -329,6 +330,8 @@ Table TwinBulkFlowModel::run(const Dataset& dataset, const Trial& trial) {
     }
     config.feeder.initial_fill = static_cast<std::uint32_t>(fillets);
   }
+  const auto feed = trial.conditions.find("feed_rate");
+  if (feed != trial.conditions.end()) config.feeder.rate_per_s = std::get<double>(feed->second);
   const std::vector<double>& opening_m = trial.data.at("opening").values_si;
   std::vector<double> openings_mm;
   for (const double opening : opening_m) {

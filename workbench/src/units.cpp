@@ -38,6 +38,9 @@ constexpr std::array kUnits{
     Unit{"g/s", Quantity::kMassFlow, 1e-3},
     Unit{"J", Quantity::kEnergy, 1.0},
     Unit{"mJ", Quantity::kEnergy, 1e-3},
+    Unit{"1/s", Quantity::kRate, 1.0},
+    Unit{"1/min", Quantity::kRate, 1.0 / 60.0},
+    Unit{"1/h", Quantity::kRate, 1.0 / 3600.0},
 };
 
 }  // namespace
@@ -62,6 +65,8 @@ std::string_view to_string(Quantity quantity) {
       return "mass flow";
     case Quantity::kEnergy:
       return "energy";
+    case Quantity::kRate:
+      return "rate";
   }
   return "unknown";
 }

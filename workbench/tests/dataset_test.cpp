@@ -147,6 +147,24 @@ TEST(Dataset, RequiredConditionMayComeFromEitherLevelButMustCome) {
   EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 5, "out of range"));
 }
 
+// A bulk-flow hopper fed while it runs: a rate of fillets, in any rate unit.
+TEST(Dataset, BulkFlowFeedRateIsARate) {
+  const DatasetFolder folder;
+  folder.write("a.csv", "opening [mm],outflow [kg/s]\n50,0.4\n");
+  folder.write("manifest.yaml",
+               manifest("bulk_flow", "conditions:\n  feed_rate: 180 1/min\n", kOneTrial));
+  const Dataset data = load_dataset(folder.path());
+  EXPECT_DOUBLE_EQ(std::get<double>(data.trials.front().conditions.at("feed_rate")), 3.0);
+  // A length is not a rate.
+  folder.write("manifest.yaml",
+               manifest("bulk_flow", "conditions:\n  feed_rate: 3 mm\n", kOneTrial));
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 5, "is not a rate"));
+  // 30 a second is beyond the 20 the schema allows (four times the line's supply).
+  folder.write("manifest.yaml",
+               manifest("bulk_flow", "conditions:\n  feed_rate: 30 1/s\n", kOneTrial));
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 5, "out of range"));
+}
+
 TEST(Dataset, DuplicateTrialIdsAndNoTrials) {
   const DatasetFolder folder;
   folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,0,0\n");

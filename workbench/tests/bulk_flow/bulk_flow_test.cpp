@@ -76,6 +76,21 @@ TEST(BulkFlowTwin, TheFillConditionReachesTheScene) {
   EXPECT_THROW((void)model.run(sparse, sparse.trials.front()), std::runtime_error);
 }
 
+TEST(BulkFlowTwin, TheFeedRateConditionKeepsTheHopperSupplied) {
+  TwinBulkFlowModel model(base_model(), narrow_scene());
+  // Two fillets to start with: alone, at most both (under 0.5 kg) pass in the 1.5 s. Fed
+  // 8 a second from 450 mm up (they land within 0.3 s), about 14 more arrive before the
+  // measurement ends, so more passes the open gate.
+  Dataset fed = bulk_dataset({0.100}, 0.2);
+  fed.trials.front().conditions["fill"] = 2.0;
+  Dataset sparse = fed;
+  fed.trials.front().conditions["feed_rate"] = 8.0;
+  const double sparse_kg_per_s =
+      model.run(sparse, sparse.trials.front()).at("outflow").values_si.front();
+  const double fed_kg_per_s = model.run(fed, fed.trials.front()).at("outflow").values_si.front();
+  EXPECT_GT(fed_kg_per_s, sparse_kg_per_s + 0.1 / 1.5);  // at least one fillet (0.1 kg) more
+}
+
 TEST(BulkFlowTwin, RefusesAnOpeningTheGateCannotReach) {
   TwinBulkFlowModel model(base_model(), narrow_scene());
   const Dataset data = bulk_dataset({0.5}, 0.2);  // the cylinder stops at 150 mm

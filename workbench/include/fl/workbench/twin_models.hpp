@@ -107,8 +107,10 @@ struct BulkFlowSettings {
 };
 
 // Bulk flow: one row per gate opening; each row is a fresh bulk scene with the gate at that
-// opening, the belt at the trial's `belt_speed` and the hopper filled with the trial's `fill`
-// fillets (absent: the scene's); the answer is the mass flow out of the mailbox, under its gate.
+// opening, the belt at the trial's `belt_speed`, the hopper filled with the trial's `fill`
+// fillets (absent: the scene's) and fed `feed_rate` more a second while it runs (absent: the
+// scene's feeder, none by default); the answer is the mass flow out of the mailbox, under its
+// gate.
 // The fed fillets are the six variants drawn by the scene's seed (a variant condition does not
 // narrow them: a bulk is mixed). A wet_film law acts on surface=wet trials only, as in the slide
 // model.

@@ -22,6 +22,7 @@ enum class Quantity : std::uint8_t {
   kSpeed,
   kMassFlow,
   kEnergy,
+  kRate,  // counts per time: fillets fed per second
 };
 
 // "length", "mass flow", ...
