@@ -904,7 +904,9 @@ void Simulation::compute_forces() {
           const std::size_t wall = planes + mesh;
           const double reach = ri + m.wall_range_m[wall_row + wall];
           const std::uint64_t bit = wall_bit(wall);
-          const bool near = m.mesh_boxes[mesh].exteriorDistance(xi) < reach;
+          // squared distances: a square root per triangle was the wall loop's main cost
+          const double reach_squared = reach * reach;
+          const bool near = m.mesh_boxes[mesh].squaredExteriorDistance(xi) < reach_squared;
           if (!near && (history & bit) == 0) continue;  // far, nothing to forget
           MeshSlot* slots = &m.mesh_slots[mesh][i * kMeshSlots];
           int candidates = 0;
@@ -912,11 +914,11 @@ void Simulation::compute_forces() {
             const auto& triangles = m.mesh_triangles[mesh];
             const auto& boxes = m.mesh_triangle_boxes[mesh];
             for (std::size_t tri = 0; tri < triangles.size() && candidates < 16; ++tri) {
-              if (boxes[tri].exteriorDistance(xi) >= reach) continue;
+              if (boxes[tri].squaredExteriorDistance(xi) >= reach_squared) continue;
               const auto& vertices = triangles[tri].vertices_m;
               const ClosestPoint cp =
                   closest_point_on_triangle(xi, vertices[0], vertices[1], vertices[2]);
-              if ((xi - cp.point_m).squaredNorm() >= reach * reach) continue;
+              if ((xi - cp.point_m).squaredNorm() >= reach_squared) continue;
               candidate_triangle[static_cast<std::size_t>(candidates)] =
                   static_cast<std::uint32_t>(tri);
               candidate_point[static_cast<std::size_t>(candidates)] = cp;
