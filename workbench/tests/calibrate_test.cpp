@@ -111,6 +111,32 @@ TEST(Calibrate, AddressesSetEveryLawTheyNameAndNothingElse) {
   }
 }
 
+// A compression dataset measured with bonds 1.8 times appendix B's normal stiffness and no
+// effect, at the tests' force noise: what a calibration must find.
+constexpr double kTruthStiffness = 1.8e6;
+Dataset stiffer_bonds_compression() {
+  GeneratorOptions options;
+  options.effect = "none";
+  options.force_noise_n = test::kNoiseN;
+  options.common = test::base_model();
+  options.common.base_spec =
+      with_calibrated(options.common.base_spec,
+                      {{"bond.normal_stiffness_n_per_m3", 1.0, 2.0, false}}, {kTruthStiffness});
+  return generate_dataset(options).dataset;
+}
+
+// The normal stiffness (3e5 to 1e7, log) calibrated together with `other`: 8 Hammersley points
+// and at most 20 local evaluations, as a quick two-parameter fit.
+Calibration calibrate_stiffness_and(const Dataset& data, const std::string& other) {
+  CalibrationOptions calibration;
+  calibration.hammersley_points = 8;
+  calibration.max_local_evaluations = 20;
+  return calibrate(data, test::base_model(),
+                   {parse_calibrated_parameter("bond.normal_stiffness_n_per_m3=3e5:1e7:log"),
+                    parse_calibrated_parameter(other)},
+                   calibration);
+}
+
 // The curvature matrix from the moves of an exact quadratic bowl rss(u) = 100 + d^T A d,
 // d = u - u0, in three parameters: the finite differences are exact for a quadratic, so A comes
 // back to rounding. Parameter 1 sits 0.05 below the top of its box, so its up move is not made
@@ -214,15 +240,7 @@ TEST(Calibrate, RecoversTheBondStiffnessOfACompressionDataset) {
   // B. The plate force is proportional to the normal stiffness, so the fit must find it to the
   // noise: 0.01 N on forces of about 1 N over ~170 rows is a 0.1 % stiffness resolution; 2 %
   // leaves the local fit's tolerance room.
-  constexpr double kTruthStiffness = 1.8e6;
-  GeneratorOptions options;
-  options.effect = "none";
-  options.force_noise_n = test::kNoiseN;
-  options.common = test::base_model();
-  options.common.base_spec =
-      with_calibrated(options.common.base_spec,
-                      {{"bond.normal_stiffness_n_per_m3", 1.0, 2.0, false}}, {kTruthStiffness});
-  const Dataset data = generate_dataset(options).dataset;
+  const Dataset data = stiffer_bonds_compression();
   CalibrationOptions calibration;
   calibration.hammersley_points = 8;
   const Calibration result = calibrate(
@@ -252,26 +270,14 @@ TEST(Calibrate, JointIntervalShowsTheTradeOffTheConditionalOneHides) {
   // each parameter is pinned by the 0.01 N noise; re-fitted together they slide along that
   // valley (only the shear bonds, k_t A, tell them apart a little). The truth is 1.8 times
   // appendix B's stiffness at its disk scale 1.
-  GeneratorOptions options;
-  options.effect = "none";
-  options.force_noise_n = test::kNoiseN;
-  options.common = test::base_model();
-  options.common.base_spec = with_calibrated(
-      options.common.base_spec, {{"bond.normal_stiffness_n_per_m3", 1.0, 2.0, false}}, {1.8e6});
-  const Dataset data = generate_dataset(options).dataset;
-  CalibrationOptions calibration;
-  calibration.hammersley_points = 8;
-  calibration.max_local_evaluations = 20;
   const Calibration result =
-      calibrate(data, test::base_model(),
-                {parse_calibrated_parameter("bond.normal_stiffness_n_per_m3=3e5:1e7:log"),
-                 parse_calibrated_parameter("bond.bonded_disk_scale=0.5:1.5")},
-                calibration);
+      calibrate_stiffness_and(stiffer_bonds_compression(), "bond.bonded_disk_scale=0.5:1.5");
   ASSERT_EQ(result.sensitivity.size(), 2U);
   // The fit lands somewhere on the valley: at the noise, with k_n s^2 at the truth's 1.8e6
   // (2 %: the shear bonds' small part and the fit's tolerance).
   EXPECT_LT(result.rmse, 1.2 * test::kNoiseN);
-  EXPECT_NEAR(result.best[0] * result.best[1] * result.best[1], 1.8e6, 0.02 * 1.8e6);
+  EXPECT_NEAR(result.best[0] * result.best[1] * result.best[1], kTruthStiffness,
+              0.02 * kTruthStiffness);
   for (const ParameterSensitivity& s : result.sensitivity) {
     // Alone, each looks determined, with a narrow interval...
     EXPECT_TRUE(s.determined);
@@ -298,21 +304,8 @@ TEST(Calibrate, SensitivitySaysWhichParametersTheDataDetermine) {
   // of a 10x log box is a 26 % step: far beyond the 0.01 N noise), while the friction with the
   // plates has nothing to act on (the block is pressed straight down). The stiffness must come
   // out determined and the friction not; the truth is 1.8 times appendix B's stiffness.
-  GeneratorOptions options;
-  options.effect = "none";
-  options.force_noise_n = test::kNoiseN;
-  options.common = test::base_model();
-  options.common.base_spec = with_calibrated(
-      options.common.base_spec, {{"bond.normal_stiffness_n_per_m3", 1.0, 2.0, false}}, {1.8e6});
-  const Dataset data = generate_dataset(options).dataset;
-  CalibrationOptions calibration;
-  calibration.hammersley_points = 8;
-  calibration.max_local_evaluations = 20;
-  const Calibration result =
-      calibrate(data, test::base_model(),
-                {parse_calibrated_parameter("bond.normal_stiffness_n_per_m3=3e5:1e7:log"),
-                 parse_calibrated_parameter("fillet_equipment.coulomb.friction_coefficient=0.1:1")},
-                calibration);
+  const Calibration result = calibrate_stiffness_and(
+      stiffer_bonds_compression(), "fillet_equipment.coulomb.friction_coefficient=0.1:1");
   ASSERT_EQ(result.sensitivity.size(), 2U);
   const ParameterSensitivity& stiffness = result.sensitivity[0];
   const ParameterSensitivity& friction = result.sensitivity[1];
@@ -322,9 +315,9 @@ TEST(Calibrate, SensitivitySaysWhichParametersTheDataDetermine) {
   EXPECT_FALSE(friction.determined);
   // The stiffness' 95 % interval holds the truth and is narrow: the noise resolves the
   // stiffness to about 0.3 % here, and 5 % leaves room for the parabola over a 26 % step.
-  EXPECT_LE(stiffness.interval_low, 1.8e6);
-  EXPECT_GE(stiffness.interval_high, 1.8e6);
-  EXPECT_LT(stiffness.interval_high - stiffness.interval_low, 0.05 * 1.8e6);
+  EXPECT_LE(stiffness.interval_low, kTruthStiffness);
+  EXPECT_GE(stiffness.interval_high, kTruthStiffness);
+  EXPECT_LT(stiffness.interval_high - stiffness.interval_low, 0.05 * kTruthStiffness);
   // The friction's is unbounded, or spans most of its box: the data say nothing of it.
   const bool friction_bounded =
       std::isfinite(friction.interval_low) && std::isfinite(friction.interval_high);
@@ -340,7 +333,7 @@ TEST(Calibrate, SensitivitySaysWhichParametersTheDataDetermine) {
   // The Hammersley design is sliced in quarters; every quarter of 8 points has some.
   ASSERT_EQ(stiffness.main_effect_rmse.size(), 4U);
   for (const double rmse : stiffness.main_effect_rmse) EXPECT_TRUE(std::isfinite(rmse));
-  EXPECT_GE(result.evaluations, 1 + 8 + 4);  // the base model, the design, the four moves
+  EXPECT_GE(result.evaluations, 1 + 8 + 5);  // the base model, the design, the five moves
 
   const std::filesystem::path folder =
       std::filesystem::path(testing::TempDir()) / "calibrate_sensitivity_plots";
