@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <ctime>
 #include <limits>
@@ -138,6 +140,14 @@ bool write_json_option(const std::string& path, const nlohmann::json& json) {
     return false;
   }
   return true;
+}
+
+RuntimeOptions watchdog_runtime_options(const LineConfig& line) {
+  RuntimeOptions options;
+  options.period_ns = std::llround(static_cast<double>(line.watchdog.cycle_period_s) * 1e9);
+  options.overrun_fault_consecutive =
+      static_cast<std::uint32_t>(std::max(line.watchdog.overrun_fault_cycles, 0));
+  return options;
 }
 
 void add_cpu_dma_latency_option(CLI::App& command, int& latency_us) {

@@ -20,6 +20,7 @@
 #include "fl/controller/line_config.hpp"
 #include "fl/controller/plant.hpp"
 #include "fl/controller/process_image.hpp"
+#include "fl/controller/runtime.hpp"
 
 namespace fl::apps {
 
@@ -79,6 +80,11 @@ nlohmann::json summary_json(const DistributionSummary& summary);
 
 // --json FILE: writes `json` indented; logs and returns false when the file cannot be written.
 bool write_json_option(const std::string& path, const nlohmann::json& json);
+
+// The scan runtime's period and overrun fault from the line's watchdog (line.yaml): the same
+// period the logic judges overruns by and the CAN master's SYNC runs at, and the same count of
+// overruns in a row that faults the line. Scheduling options are the caller's.
+RuntimeOptions watchdog_runtime_options(const LineConfig& line);
 
 // --cpu-dma-latency US: the PM QoS request the scan's commands share (-1, the default, off).
 void add_cpu_dma_latency_option(CLI::App& command, int& latency_us);

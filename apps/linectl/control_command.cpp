@@ -130,7 +130,7 @@ namespace {
 int run_control(ControlParts& parts, dds::DdsProcessIo& io, const ModeHooks& hooks) {
   const ControlArgs& args = parts.args;
   const RunTimes& times = parts.times;
-  RuntimeOptions options;
+  RuntimeOptions options = watchdog_runtime_options(parts.line);
   options.fifo_priority = args.fifo_priority;
   options.lock_memory = args.lock_memory;
   options.cpu_dma_latency_us = args.cpu_dma_latency_us;

@@ -89,7 +89,7 @@ RealtimeRunResult run_realtime(const RealtimeRunOptions& options, const LineConf
   const std::unique_ptr<HmiRun> hmi = start_hmi(options.hmi_config, line, logic, io);
   if (!hmi && options.status != nullptr) logic.attach_status(options.status);
   io.request_line_start();
-  RuntimeOptions runtime_options;
+  RuntimeOptions runtime_options = watchdog_runtime_options(line);
   runtime_options.fifo_priority = options.fifo_priority;
   runtime_options.lock_memory = options.lock_memory;
   runtime_options.cpu_dma_latency_us = options.cpu_dma_latency_us;

@@ -22,10 +22,13 @@ namespace fl::drivers::test {
 
 inline constexpr const char* kCandump = "/opt/candump";
 
-// Starts candump on vcan0 when it is in the guest; running() says whether it is.
+// Starts candump on vcan0 when it is in the guest; running() says whether it is. `interface`
+// is candump's interface argument with its optional filters ("vcan0,080:7FF"): the kernel
+// then hands candump only those frames, which keeps it light on the guest's one emulated CPU.
 class Candump {
  public:
-  explicit Candump(std::string log_path = "/tmp/candump.log") : log_path_(std::move(log_path)) {
+  explicit Candump(std::string log_path = "/tmp/candump.log", std::string interface = "vcan0")
+      : log_path_(std::move(log_path)), interface_(std::move(interface)) {
     if (access(kCandump, X_OK) != 0) {
       return;
     }
@@ -35,8 +38,7 @@ class Candump {
                                      O_WRONLY | O_CREAT | O_TRUNC, 0644);
     char arg0[] = "candump";
     char arg1[] = "-L";
-    char arg2[] = "vcan0";
-    char* argv[] = {arg0, arg1, arg2, nullptr};
+    char* argv[] = {arg0, arg1, interface_.data(), nullptr};
     if (posix_spawn(&pid_, kCandump, &actions, nullptr, argv, environ) != 0) {
       pid_ = -1;
     }
@@ -65,6 +67,7 @@ class Candump {
 
  private:
   std::string log_path_;
+  std::string interface_;
   pid_t pid_ = -1;
 };
 
