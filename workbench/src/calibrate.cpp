@@ -252,6 +252,7 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
   const double variance = result.noise_si > 0.0 ? result.noise_si * result.noise_si
                                                 : result.rmse * result.rmse * n / free_samples;
   const double threshold = kChiSquare95OneParameter * variance;
+  const auto rss = [&](double rmse) { return n * rmse * rmse; };
   std::vector<ParameterSensitivity> out(dimensions);
   for (std::size_t p = 0; p < dimensions; ++p) {
     ParameterSensitivity& s = out[p];
@@ -271,7 +272,6 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
       }
     }
     s.determined = moves_made > 0 && significant == moves_made;
-    const auto rss = [&](double rmse) { return n * rmse * rmse; };
     const auto [low_u, high_u] =
         detail::quadratic_interval(rss(s.rmse_down), rss(result.rmse), rss(s.rmse_up), best_unit[p],
                                    kSensitivityStep, threshold);
@@ -297,7 +297,6 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
   }
 
   // The joint intervals from the whole curvature matrix.
-  const auto rss = [&](double rmse) { return n * rmse * rmse; };
   std::vector<double> rss_down(dimensions);
   std::vector<double> rss_up(dimensions);
   for (std::size_t p = 0; p < dimensions; ++p) {
@@ -324,18 +323,28 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
 
 }  // namespace
 
+namespace {
+
+// a of rss(u) = rss_best + a (u - u0)^2 along one axis: the moves' second difference, or one
+// move's rise over step^2 where the other is missing (NaN); NaN without either move.
+double axis_curvature(double rss_down, double rss_best, double rss_up, double step) {
+  if (std::isfinite(rss_down) && std::isfinite(rss_up)) {
+    return (rss_down - 2.0 * rss_best + rss_up) / (2.0 * step * step);
+  }
+  if (std::isfinite(rss_down) || std::isfinite(rss_up)) {
+    return ((std::isfinite(rss_down) ? rss_down : rss_up) - rss_best) / (step * step);
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
+
 std::pair<double, double> detail::quadratic_interval(double rss_down, double rss_best,
                                                      double rss_up, double u_best, double step,
                                                      double threshold) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   if (!std::isfinite(rss_best) || !(step > 0.0) || !(threshold > 0.0)) return {nan, nan};
-  double curvature = 0.0;  // a of rss(u) = rss_best + a (u - u_best)^2
-  if (std::isfinite(rss_down) && std::isfinite(rss_up)) {
-    curvature = (rss_down - 2.0 * rss_best + rss_up) / (2.0 * step * step);
-  } else if (std::isfinite(rss_down) || std::isfinite(rss_up)) {
-    const double rss_side = std::isfinite(rss_down) ? rss_down : rss_up;
-    curvature = (rss_side - rss_best) / (step * step);
-  }
+  const double curvature = axis_curvature(rss_down, rss_best, rss_up, step);
   if (!(curvature > 0.0)) return {nan, nan};
   const double half_width = std::sqrt(threshold / curvature);
   return {u_best - half_width, u_best + half_width};
@@ -358,13 +367,8 @@ std::vector<std::vector<double>> detail::curvature_matrix(const std::vector<doub
   for (std::size_t p = 0; p < dimensions; ++p) {
     const double down = rss_down[p];
     const double up = rss_up[p];
-    if (std::isfinite(down) && std::isfinite(up)) {
-      a[p][p] = (down - 2.0 * rss_best + up) / (2.0 * step * step);
-    } else if (std::isfinite(down) || std::isfinite(up)) {
-      a[p][p] = ((std::isfinite(down) ? down : up) - rss_best) / (step * step);
-    } else {
-      return {};
-    }
+    a[p][p] = axis_curvature(down, rss_best, up, step);
+    if (std::isnan(a[p][p])) return {};
     rss_signed[p] = sign[p] > 0 ? up : down;
     if (!std::isfinite(rss_signed[p])) return {};
   }
