@@ -6,7 +6,7 @@ find_package(OpenMP REQUIRED)
 set(FL_TWIN_DEM_DIR ${CMAKE_CURRENT_LIST_DIR}/src/dem)
 add_library(
   fl_twin_dem STATIC
-  ${FL_TWIN_DEM_DIR}/laws.cpp ${FL_TWIN_DEM_DIR}/model.cpp ${FL_TWIN_DEM_DIR}/geometry.cpp
+  ${FL_TWIN_DEM_DIR}/laws.cpp ${FL_TWIN_DEM_DIR}/bpm_vector_kernel.cpp ${FL_TWIN_DEM_DIR}/model.cpp ${FL_TWIN_DEM_DIR}/geometry.cpp
   ${FL_TWIN_DEM_DIR}/simulation.cpp ${FL_TWIN_DEM_DIR}/config.cpp
   ${FL_TWIN_DEM_DIR}/vtk_writer.cpp)
 target_include_directories(fl_twin_dem PUBLIC ${CMAKE_CURRENT_LIST_DIR}/include)

@@ -31,13 +31,20 @@ int main(int argc, char** argv) {
   app.add_option("--threads", threads, "engine threads")->check(CLI::Range(1, 256));
   app.add_option("--settle", settle_steps, "steps before timing")->check(CLI::Range(0, 10000000));
   app.add_option("--steps", steps, "timed steps")->check(CLI::Range(1, 10000000));
+  std::string bond_kernel = "auto";
+  app.add_option("--bond-kernel", bond_kernel,
+                 "bonded law's code (same results): auto | scalar | avx2")
+      ->check(CLI::IsMember({"auto", "scalar", "avx2"}));
   CLI11_PARSE(app, argc, argv);
+  const fl::dem::BondKernel kernel = bond_kernel == "scalar" ? fl::dem::BondKernel::kScalar
+                                     : bond_kernel == "avx2" ? fl::dem::BondKernel::kAvx2Vector
+                                                             : fl::dem::BondKernel::kAuto;
   if (tag.empty()) tag = scenario;
 
   namespace race = fl::dem::race;
-  auto sim = scenario == "bed"
-                 ? race::make_bed(nx, ny, nz, threads, settle_steps)
-                 : race::make_fillets(fillets, threads, scenario == "fillets_jkr", settle_steps);
+  auto sim = scenario == "bed" ? race::make_bed(nx, ny, nz, threads, settle_steps)
+                               : race::make_fillets(fillets, threads, scenario == "fillets_jkr",
+                                                    settle_steps, kernel);
   const std::uint64_t rebuilds_before = sim->stats().neighbor_rebuilds;
   const auto start = std::chrono::steady_clock::now();
   sim->step(static_cast<std::size_t>(steps));
@@ -49,8 +56,13 @@ int main(int argc, char** argv) {
               steps, wall_s, n * steps / wall_s,
               2.0 * static_cast<double>(sim->stats().touching_pairs) / n);
   // stderr, so that the TSV line stays one line: how often the Verlet list was rebuilt
-  std::fprintf(stderr, "%s: %llu neighbour rebuilds in %d timed steps\n", tag.c_str(),
+  const bool vector_bonds = kernel != fl::dem::BondKernel::kScalar &&
+                            fl::dem::avx2_bond_kernel_available() && !sim->state().bonds.empty();
+  std::fprintf(stderr, "%s: %llu neighbour rebuilds in %d timed steps; bonds %s\n", tag.c_str(),
                static_cast<unsigned long long>(sim->stats().neighbor_rebuilds - rebuilds_before),
-               steps);
+               steps,
+               sim->state().bonds.empty() ? "none"
+               : vector_bonds             ? "avx2"
+                                          : "scalar");
   return 0;
 }

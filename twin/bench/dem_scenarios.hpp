@@ -76,7 +76,8 @@ inline std::unique_ptr<Simulation> make_bed(int nx, int ny, int nz, int threads,
 
 // `fillets` blocks in two layers (fillets / 2 per layer on a near-square grid).
 inline std::unique_ptr<Simulation> make_fillets(int fillets, int threads, bool with_jkr,
-                                                int settle_steps) {
+                                                int settle_steps,
+                                                BondKernel kernel = BondKernel::kAuto) {
   const double a = 0.008;
   const int per_layer = fillets / 2;
   int fx = static_cast<int>(std::lround(std::sqrt(per_layer)));
@@ -84,6 +85,7 @@ inline std::unique_ptr<Simulation> make_fillets(int fillets, int threads, bool w
   const int fy = per_layer / fx;
   const double px = 14 * a, py = 12 * a, pz = 8 * a;
   ModelSpec spec = base_spec(threads, with_jkr, true);
+  spec.bond_kernel = kernel;
   const double xmax = a + (fx - 1) * px + 7 * a + 10 * a + 0.02;
   const double ymax = a + (fy - 1) * py + 6 * a + 7 * a + 0.02;
   spec.domain.lower_m = Vec3(-0.05, -0.05, -0.01);

@@ -836,6 +836,7 @@ void Simulation::compute_forces() {
       batch.force_n = force;
       batch.torque_nm = torque;
       batch.timestep_s = dt;
+      batch.kernel = model_->spec().bond_kernel;
       const std::uint32_t bonds_end = m.bond_begin[t + 1];
       for (std::uint32_t k = m.bond_begin[t]; k < bonds_end;) {
         const BondLaw* law = m.bond_laws[k];

@@ -161,6 +161,14 @@ struct BondForce {
 
 struct Bond;  // state.hpp
 
+// Which code runs the default bonded law ("bpm"): one bond at a time, or four bonds at once in
+// AVX2 registers. Both give the same bits: the vector code evaluates the scalar code's
+// expressions in the same order, and the forces are summed in bond order. kAuto (and
+// kAvx2Vector) take the vector code where the CPU runs it, else the scalar one.
+enum class BondKernel { kAuto, kScalar, kAvx2Vector };
+// Whether this build and CPU run BondKernel::kAvx2Vector.
+bool avx2_bond_kernel_available();
+
 // One thread's share of a run of bonds that use the same law: the engine's arrays and the
 // thread's force and torque buffers. A law's compute_batch() handles bonds [begin, end).
 struct BondBatch {
@@ -175,6 +183,7 @@ struct BondBatch {
   Vec3* force_n = nullptr;
   Vec3* torque_nm = nullptr;
   double timestep_s = 0.0;
+  BondKernel kernel = BondKernel::kAuto;
 };
 
 class BondLaw {

@@ -78,6 +78,7 @@ struct ModelSpec {
   // spin cost more than the work (a 400-sphere line ran 3x slower on 2 threads than on 1).
   int min_particles_per_thread = 2048;
   int sort_every_rebuilds = 20;  // re-order particles by cell every n-th rebuild; 0: never
+  BondKernel bond_kernel = BondKernel::kAuto;  // same results from each; for A/B and tests
 };
 
 // A type pair resolved for the step loop.
