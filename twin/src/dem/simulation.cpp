@@ -70,8 +70,10 @@ struct Simulation::Impl {
   // cell list and neighbour list (half list: j > i under i), with contact history
   double cell_size = 0.0;
   double skin = 0.0;
-  Eigen::Vector3i cell_dims = Eigen::Vector3i::Ones();
+  Eigen::Vector3i cell_dims = Eigen::Vector3i::Ones();  // this build's grid (see rebuild)
   Vec3 cell_origin = Vec3::Zero();
+  double min_cell_size = 0.0;  // the largest reach: two radii, adhesion range and skin
+  std::size_t max_cells = 0;   // cap on the grid, so that passes over cells stay O(particles)
   std::vector<std::uint32_t> cell_start;
   std::vector<std::uint32_t> cell_particles;
   std::vector<std::uint32_t> particle_cell;
@@ -301,18 +303,9 @@ void Simulation::prepare() {
   for (const double r : s.radius_m) max_radius = std::max(max_radius, r);
   if (max_radius == 0.0) max_radius = 0.004;
   const double range = model_->max_range_m(max_radius);
-  m.cell_size = 2.0 * max_radius + range + m.skin;
-  const Vec3 extent = spec.domain.upper_m - spec.domain.lower_m;
-  for (;;) {
-    for (int d = 0; d < 3; ++d) {
-      m.cell_dims[d] = std::max(1, static_cast<int>(std::floor(extent[d] / m.cell_size)));
-    }
-    const double cells = static_cast<double>(m.cell_dims.cast<double>().prod());
-    if (cells <= 8.0 * static_cast<double>(n) + 4096.0) break;
-    m.cell_size *= 1.25;  // sparse system in a large domain: fewer, larger cells
-  }
-  m.cell_origin = spec.domain.lower_m;
-  m.cell_start.assign(static_cast<std::size_t>(m.cell_dims.prod()) + 1, 0);
+  m.min_cell_size = 2.0 * max_radius + range + m.skin;
+  m.max_cells = 8 * n + 4096;  // the grid is sized at each rebuild (rebuild_neighbors)
+  m.cell_start.assign(m.max_cells + 1, 0);
 
   m.pair_range_m.assign(m.type_count * m.type_count, 0.0);
   for (std::size_t k = 0; k < m.pair_range_m.size(); ++k) {
@@ -550,9 +543,39 @@ void Simulation::rebuild_neighbors() {
     }
   }
 
-  // 2. bin particles (counting sort by cell)
-  const std::size_t cells = m.cell_start.size() - 1;
-  std::fill(m.cell_start.begin(), m.cell_start.end(), 0U);
+  // 2. bin particles (counting sort by cell) on a grid over the particles' bounding box within
+  // the domain, not over the whole domain: a line or a race scene is mostly empty space, so
+  // the passes over empty cells were half of the binning, and capping a domain-wide grid at a
+  // few cells per particle made a line's cells several times the reach. Cells are at least the
+  // reach; particles outside the domain go into its edge cells, so the 27-cell search still
+  // reaches every pair.
+  {
+    const ModelSpec& spec = model_->spec();
+    Vec3 lower = spec.domain.upper_m;
+    Vec3 upper = spec.domain.lower_m;
+    for (std::size_t k = 0; k < n; ++k) {
+      lower = lower.cwiseMin(s.position_m[k]);  // a NaN position leaves the box as it is
+      upper = upper.cwiseMax(s.position_m[k]);
+    }
+    Vec3 extent = Vec3::Zero();
+    for (int d = 0; d < 3; ++d) {
+      const double low = std::max(lower[d], spec.domain.lower_m[d]);
+      const double high = std::min(upper[d], spec.domain.upper_m[d]);
+      m.cell_origin[d] = low <= high ? low : spec.domain.lower_m[d];
+      extent[d] = low <= high ? high - low : 0.0;
+    }
+    m.cell_size = m.min_cell_size;
+    for (;;) {
+      for (int d = 0; d < 3; ++d) {
+        m.cell_dims[d] = std::max(1, static_cast<int>(std::floor(extent[d] / m.cell_size)));
+      }
+      if (m.cell_dims.cast<double>().prod() <= static_cast<double>(m.max_cells)) break;
+      m.cell_size *= 1.25;  // sparse: fewer, larger cells
+    }
+  }
+  const auto cells = static_cast<std::size_t>(m.cell_dims.prod());
+  std::fill(m.cell_start.begin(), m.cell_start.begin() + static_cast<std::ptrdiff_t>(cells + 1),
+            0U);
   for (std::size_t k = 0; k < n; ++k) {
     const Vec3& x = s.position_m[k];
     const std::uint32_t cx =
