@@ -10,16 +10,7 @@
 #   PEERS=0    ours only
 # Output: BUILD_DIR/dem_race/{peers.tsv,ours.tsv,race.md,load.txt}
 set -euo pipefail
-root=$(cd "$(dirname "$0")/../.." && pwd)
-build=$(cd "${1:-$root/build/release}" && pwd)
-shared=${FL_SHARED:-$root/../shared}
-race=$build/twin/dem_race
-work=$build/dem_race
-[[ -x $race ]] || { echo "dem_race missing: cmake --build $build --target dem_race" >&2; exit 2; }
-rm -rf "$work"
-mkdir -p "$work"
-{ echo "start: $(date -u +%FT%TZ) $(uptime)"; nproc; grep -m1 'model name' /proc/cpuinfo; } \
-  >"$work/load.txt"
+source "$(dirname "$0")/common.sh" "${1:-}" dem_race
 
 if [[ ${PEERS:-1} == 1 ]]; then
   cp -r "$shared/bench" "$work/peers"

@@ -69,26 +69,36 @@ double minimise_in_unit_box(const UnitBoxObjective& objective, std::vector<doubl
   SearchContext context{&objective, who};
   const std::vector<double> lower(dimensions, 0.0);
   const std::vector<double> upper(dimensions, 1.0);
-  const std::vector<double> step(dimensions, initial_step);
-  nlopt_opt optimiser =
-      nlopt_create(dimensions >= 2 ? NLOPT_LN_BOBYQA : NLOPT_LN_NELDERMEAD, dimensions);
-  nlopt_set_lower_bounds(optimiser, lower.data());
-  nlopt_set_upper_bounds(optimiser, upper.data());
-  nlopt_set_min_objective(optimiser, nlopt_objective, &context);
-  nlopt_set_maxeval(optimiser, max_evaluations);
-  nlopt_set_xtol_rel(optimiser, 1e-3);
-  nlopt_set_initial_step(optimiser, step.data());
   double best = start_value;
-  std::vector<double> found = x;
-  double found_value = best;
-  const nlopt_result status = nlopt_optimize(optimiser, found.data(), &found_value);
-  nlopt_destroy(optimiser);
-  if (status < 0) {
-    spdlog::warn("{}: the local search stopped with status {}", who, static_cast<int>(status));
-  }
-  if (found_value < best) {
-    best = found_value;
-    x = found;
+  int evaluations_left = max_evaluations;
+  // A twin's objective is not smooth at fine scale (a swinging bend's mean angle, contacts
+  // that stick or slip), and a model's quadratic can then stop BOBYQA short of the valley's
+  // floor. So the search starts once more from where it stopped, with a smaller step, and
+  // keeps going while a restart still gains more than 1 %.
+  for (double step_size = initial_step; evaluations_left > 0; step_size *= 0.5) {
+    const std::vector<double> step(dimensions, step_size);
+    nlopt_opt optimiser =
+        nlopt_create(dimensions >= 2 ? NLOPT_LN_BOBYQA : NLOPT_LN_NELDERMEAD, dimensions);
+    nlopt_set_lower_bounds(optimiser, lower.data());
+    nlopt_set_upper_bounds(optimiser, upper.data());
+    nlopt_set_min_objective(optimiser, nlopt_objective, &context);
+    nlopt_set_maxeval(optimiser, evaluations_left);
+    nlopt_set_xtol_rel(optimiser, 1e-3);
+    nlopt_set_initial_step(optimiser, step.data());
+    std::vector<double> found = x;
+    double found_value = best;
+    const nlopt_result status = nlopt_optimize(optimiser, found.data(), &found_value);
+    evaluations_left -= nlopt_get_numevals(optimiser);
+    nlopt_destroy(optimiser);
+    if (status < 0) {
+      spdlog::warn("{}: the local search stopped with status {}", who, static_cast<int>(status));
+    }
+    const bool gained = found_value < 0.99 * best;
+    if (found_value < best) {
+      best = found_value;
+      x = found;
+    }
+    if (!gained || status < 0) break;
   }
   return best;
 }
