@@ -54,7 +54,6 @@ template <typename Value>
 [[gnu::always_inline]] inline std::uint32_t kernel_body(const BondBatch& b,
                                                         const BpmElasticConstants& c, bool& broke) {
   constexpr double kPi = std::numbers::pi;
-  constexpr double kSeriesLimit = 1e-4;
   std::uint32_t k = b.begin;
   for (; k + kLanes <= b.end; k += kLanes) {
     const Bond* bonds = b.bonds + k;
@@ -114,7 +113,7 @@ template <typename Value>
     const Lanes r = removed / old_squared;
     const Lanes series = 1.0 + r * (0.5 + 0.375 * r);
     const Lanes new_squared = tx * tx + ty * ty + tz * tz;
-    const LaneMask use_series = removed < kSeriesLimit * old_squared;
+    const LaneMask use_series = removed < kTangentSeriesLimit * old_squared;
     Lanes scale = series;
     // The exact length correction only where the plane turned far within a step (rare): its
     // division and square root cost as much as the rest of the law.

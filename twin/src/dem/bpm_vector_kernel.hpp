@@ -10,6 +10,11 @@
 
 namespace fl::dem::detail {
 
+// Below this (v.n)^2 / |v|^2 the shear history's length correction uses its series (laws.cpp,
+// rotate_into_tangent_plane); the vector kernel must switch at the same point to give the
+// same bits.
+inline constexpr double kTangentSeriesLimit = 1e-4;
+
 struct BpmElasticConstants {
   double normal_stiffness_n_per_m3 = 0.0;
   double shear_stiffness_n_per_m3 = 0.0;

@@ -26,7 +26,6 @@ const double kSqrtFiveSixths = std::sqrt(5.0 / 6.0);
 // GCC kept it out of line in the bond batch, which then spilled the bond's geometry to the
 // stack (9 % of the bonded race in the call alone).
 [[gnu::always_inline]] inline void rotate_into_tangent_plane(Vec3& vector, const Vec3& normal) {
-  constexpr double kSeriesLimit = 1e-4;
   // Component by component: written with Eigen expressions, GCC moved the subtraction out of
   // line in the bond batch.
   double x = vector.x();
@@ -42,7 +41,7 @@ const double kSqrtFiveSixths = std::sqrt(5.0 / 6.0);
   z -= along * normal.z();
   const double removed = along * along;
   double scale = 1.0;
-  if (removed < kSeriesLimit * old_squared) {
+  if (removed < detail::kTangentSeriesLimit * old_squared) {
     const double r = removed / old_squared;
     scale = 1.0 + r * (0.5 + 0.375 * r);
   } else {
