@@ -89,6 +89,7 @@ struct Simulation::Impl {
   std::vector<std::uint32_t> partner_offsets;  // per particle: bonded partners (CSR)
   std::vector<std::uint32_t> partner_particle;
   bool partners_valid = false;  // until a bond breaks, particles are re-ordered or added
+  std::vector<std::uint8_t> bond_break_handled;  // per bond: its freed pair has been checked
   // neighbour-list build, per thread
   std::vector<std::uint32_t> build_begin;
   std::vector<std::vector<std::uint32_t>> build_pair_j;
@@ -275,6 +276,7 @@ std::uint32_t Simulation::add_body(std::span<const Vec3> positions_m,
     }
     state_.bonds.push_back(b);
     state_.bond_states.emplace_back();
+    impl_->bond_break_handled.push_back(0);
   }
   return body;
 }
@@ -512,10 +514,12 @@ std::size_t Simulation::remove_bodies(std::span<const std::uint32_t> bodies) {
     if (bond.i == kGone || bond.j == kGone) continue;
     s.bonds[kept_bonds] = bond;
     s.bond_states[kept_bonds] = s.bond_states[b];
+    m.bond_break_handled[kept_bonds] = m.bond_break_handled[b];
     ++kept_bonds;
   }
   s.bonds.resize(kept_bonds);
   s.bond_states.resize(kept_bonds);
+  m.bond_break_handled.resize(kept_bonds);
   m.carried.clear();
   prepare();  // threads, bond laws and the neighbour list for the smaller system
   return removed;
@@ -1036,10 +1040,30 @@ void Simulation::compute_forces() {
   m.last_contact_energy_j = contact_energy;
   stats_.touching_pairs = touching;
   if (broke) {
-    m.rebuild_requested = true;  // the freed pair may touch: list it for contact
+    // The freed pair must be listed for contact before it can touch. A pair that was out of
+    // contact reach plus skin when the list was built cannot touch before the skin trigger
+    // rebuilds the list (the Verlet argument), so only a break within that reach forces a
+    // rebuild now. Bonds torn at the separation limit (two contact radii) and diagonal bonds
+    // are beyond it, so an impact that tears many bonds no longer rebuilds at each tear.
     m.partners_valid = false;
+    const auto freed_pair_within_reach = [&m, &s](const Bond& bond) {
+      const std::size_t pair_type = s.type[bond.i] * m.type_count + s.type[bond.j];
+      const Interaction& interaction = *m.interactions[pair_type];
+      // bonded pairs in contact are listed already, when in reach, like any other pair
+      if (!interaction.has_contact() || interaction.contact_between_bonded) return false;
+      const double reach =
+          s.radius_m[bond.i] + s.radius_m[bond.j] + m.pair_range_m[pair_type] + m.skin;
+      return (m.build_position_m[bond.i] - m.build_position_m[bond.j]).squaredNorm() <
+             reach * reach;
+    };
     std::size_t count = 0;
-    for (const BondState& b : s.bond_states) count += b.broken ? 1 : 0;
+    for (std::size_t k = 0; k < s.bond_states.size(); ++k) {
+      if (!s.bond_states[k].broken) continue;
+      ++count;
+      if (m.bond_break_handled[k] != 0) continue;
+      m.bond_break_handled[k] = 1;
+      m.rebuild_requested = m.rebuild_requested || freed_pair_within_reach(s.bonds[k]);
+    }
     stats_.broken_bonds = count;
   }
 }
