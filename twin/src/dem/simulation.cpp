@@ -349,13 +349,26 @@ void Simulation::prepare() {
   const std::uint32_t listed = m.pair_offsets.empty() ? 0U : m.pair_offsets.back();
   m.pair_offsets.resize(n + 1, listed);  // new particles: empty lists until the rebuild
 
+  // Each bond's law from its types in ascending order: the model holds one law per ordered
+  // pair, the same parameters both ways, and a fillet's A-B and B-A bonds alternate. Looked up
+  // by the ordered pair, a body's bonds split into runs of one or two, and a vector kernel
+  // needs whole runs of one law.
   m.bond_laws.resize(s.bonds.size());
   for (std::size_t k = 0; k < s.bonds.size(); ++k) {
-    m.bond_laws[k] = model_->interaction(s.type[s.bonds[k].i], s.type[s.bonds[k].j]).bond_law.get();
+    const std::uint32_t type_i = s.type[s.bonds[k].i];
+    const std::uint32_t type_j = s.type[s.bonds[k].j];
+    m.bond_laws[k] =
+        model_->interaction(std::min(type_i, type_j), std::max(type_i, type_j)).bond_law.get();
   }
   m.bond_begin.resize(threads + 1);
   for (std::size_t t = 0; t <= threads; ++t) {
     m.bond_begin[t] = static_cast<std::uint32_t>(s.bonds.size() * t / threads);
+  }
+  stats_.bond_law_runs = 0;
+  for (std::size_t t = 0; t < threads; ++t) {
+    for (std::uint32_t k = m.bond_begin[t]; k < m.bond_begin[t + 1]; ++k) {
+      if (k == m.bond_begin[t] || m.bond_laws[k] != m.bond_laws[k - 1]) ++stats_.bond_law_runs;
+    }
   }
   m.particle_begin.assign(threads + 1, static_cast<std::uint32_t>(n));
   m.particle_begin[0] = 0;

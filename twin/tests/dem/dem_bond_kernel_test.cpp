@@ -202,5 +202,44 @@ TEST(DemBondKernel, BondedDropIsTheSameRunWithEitherKernel) {
   }
 }
 
+// A fillet's sub-particles alternate two types, bonded only A-B (thesis 3.3), so its bonds go
+// A-B and B-A in turn. Both orders are one law: a 5x4x3 checkerboard block's bonds are one run
+// of one law per thread, which the vector kernel takes whole (they were runs of one or two).
+TEST(DemBondKernel, AlternatingTypesBondAsOneRunPerThread) {
+  ModelSpec spec = test::ball_model({test::hertz(0.3)}, 1.678512e-4);
+  spec.types = {{"fillet_a", 0}, {"fillet_b", 0}};
+  spec.interactions = {{0, 0, {test::hertz(0.3)}, std::nullopt, false},
+                       {1, 1, {test::hertz(0.3)}, std::nullopt, false},
+                       {0, 1, {test::hertz(0.3)}, test::bpm(1e6, 6e5), false}};
+  spec.min_particles_per_thread = 1;
+  std::vector<Vec3> positions;
+  std::vector<std::uint8_t> types;
+  const double pitch = 2.0 * kRadius;
+  for (int x = 0; x < 5; ++x)
+    for (int y = 0; y < 4; ++y)
+      for (int z = 0; z < 3; ++z) {
+        positions.emplace_back(x * pitch, y * pitch, z * pitch);
+        types.push_back(static_cast<std::uint8_t>((x + y + z) % 2));
+      }
+  std::vector<BodyBond> bonds;
+  std::size_t b_to_a = 0;
+  for (std::uint32_t a = 0; a < positions.size(); ++a)
+    for (std::uint32_t b = a + 1; b < positions.size(); ++b)
+      if (types[a] != types[b] && (positions[a] - positions[b]).norm() < pitch * 1.5) {
+        bonds.push_back({a, b, kAppendixBContactRadiusM});
+        b_to_a += types[a] == 1 ? 1 : 0;
+      }
+  ASSERT_GT(b_to_a, 0U);  // both orders occur
+  ASSERT_LT(b_to_a, bonds.size());
+  const std::vector<double> radii(positions.size(), kRadius);
+  for (const int threads : {1, 2}) {
+    spec.thread_count = threads;
+    Simulation sim(std::make_shared<Model>(spec));
+    sim.add_body(positions, radii, types, bonds, BodyPose{});
+    sim.step(1);
+    EXPECT_EQ(sim.stats().bond_law_runs, static_cast<std::size_t>(threads)) << threads;
+  }
+}
+
 }  // namespace
 }  // namespace fl::dem

@@ -68,6 +68,8 @@ struct SimulationStats {
   std::size_t neighbor_pairs = 0;
   std::size_t touching_pairs = 0;  // last force evaluation, sphere-sphere
   std::size_t broken_bonds = 0;
+  // bonds are computed in runs of one law (per thread); the vector kernel works on whole runs
+  std::size_t bond_law_runs = 0;
 };
 
 // Timestep check against the Rayleigh time and the stiffest bonded particle.
