@@ -103,6 +103,18 @@ struct Simulation::Impl {
   std::vector<std::vector<Triangle>> mesh_triangles;  // current pose
   std::vector<std::vector<Eigen::AlignedBox3d>> mesh_triangle_boxes;
   std::vector<Eigen::AlignedBox3d> mesh_boxes;
+  // Per mesh: the pose its triangles were placed with, and a count of the placements that
+  // moved it. A mesh placed as at the last neighbour build is searched through the wall list.
+  std::vector<WallState> mesh_pose;
+  std::vector<std::uint8_t> mesh_placed;
+  std::vector<std::uint64_t> mesh_moves;
+  std::vector<std::uint64_t> mesh_moves_at_build;
+  // Wall list (CSR per particle): the triangles within reach plus skin at the last build, by
+  // mesh then triangle, as (mesh, triangle). A particle moves at most half the skin before
+  // the next build, so no other triangle of an unmoved mesh can reach it.
+  std::vector<std::uint32_t> wall_list_offsets;
+  std::vector<std::uint32_t> wall_list_mesh;
+  std::vector<std::uint32_t> wall_list_triangle;
   std::vector<std::vector<MeshSlot>> mesh_slots;  // [mesh][particle * kMeshSlots + slot]
   // Per particle, bit w (w < 63) or bit 63 (walls 63 and up): the particle may hold contact
   // history with wall w. Far walls without history are skipped without touching their slots.
@@ -164,6 +176,10 @@ Simulation::Simulation(std::shared_ptr<const Model> model)
   m.mesh_triangles.resize(spec.meshes.size());
   m.mesh_triangle_boxes.resize(spec.meshes.size());
   m.mesh_boxes.resize(spec.meshes.size());
+  m.mesh_pose.resize(spec.meshes.size());
+  m.mesh_placed.assign(spec.meshes.size(), 0);
+  m.mesh_moves.assign(spec.meshes.size(), 0);
+  m.mesh_moves_at_build.assign(spec.meshes.size(), std::numeric_limits<std::uint64_t>::max());
   m.mesh_slots.resize(spec.meshes.size());
   for (std::size_t w = 0; w < spec.meshes.size(); ++w) {
     m.mesh_triangles[w] = spec.meshes[w].triangles;
@@ -396,6 +412,15 @@ void Simulation::update_wall_geometry() {
   }
   for (std::size_t w = 0; w < spec.meshes.size(); ++w) {
     const WallState& ws = state.walls[spec.planes.size() + w];
+    WallState& placed = m.mesh_pose[w];
+    if (m.mesh_placed[w] != 0 && placed.pivot_m == ws.pivot_m &&
+        placed.translation_m == ws.translation_m &&
+        placed.rotation.coeffs() == ws.rotation.coeffs()) {
+      continue;  // the same pose gives the same triangles
+    }
+    placed = ws;
+    m.mesh_placed[w] = 1;
+    ++m.mesh_moves[w];
     const auto& reference = spec.meshes[w].triangles;
     auto& current = m.mesh_triangles[w];
     auto& boxes = m.mesh_triangle_boxes[w];
@@ -773,6 +798,34 @@ void Simulation::rebuild_neighbors() {
   if (m.prepared && m.forces_valid && list_capacity() != capacity_before) {
     ++stats_.neighbor_capacity_growths;
   }
+  // 7. wall list: each particle's triangles within reach plus skin
+  {
+    const ModelSpec& spec = model_->spec();
+    const std::size_t planes = spec.planes.size();
+    const std::size_t wall_count = planes + spec.meshes.size();
+    m.wall_list_offsets.resize(n + 1);
+    m.wall_list_mesh.clear();
+    m.wall_list_triangle.clear();
+    for (std::size_t k = 0; k < n; ++k) {
+      m.wall_list_offsets[k] = static_cast<std::uint32_t>(m.wall_list_mesh.size());
+      const Vec3& xi = s.position_m[k];
+      const std::size_t wall_row = s.type[k] * wall_count;
+      for (std::size_t mesh = 0; mesh < spec.meshes.size(); ++mesh) {
+        const double reach = s.radius_m[k] + m.wall_range_m[wall_row + planes + mesh] + m.skin;
+        const double reach_squared = reach * reach;
+        if (m.mesh_boxes[mesh].squaredExteriorDistance(xi) >= reach_squared) continue;
+        const auto& boxes = m.mesh_triangle_boxes[mesh];
+        for (std::size_t tri = 0; tri < boxes.size(); ++tri) {
+          if (boxes[tri].squaredExteriorDistance(xi) >= reach_squared) continue;
+          m.wall_list_mesh.push_back(static_cast<std::uint32_t>(mesh));
+          m.wall_list_triangle.push_back(static_cast<std::uint32_t>(tri));
+        }
+      }
+    }
+    m.wall_list_offsets[n] = static_cast<std::uint32_t>(m.wall_list_mesh.size());
+    m.mesh_moves_at_build = m.mesh_moves;
+  }
+
   stats_.neighbor_pairs = m.pair_j.size();
   ++stats_.neighbor_rebuilds;
   m.rebuild_requested = false;
@@ -930,6 +983,8 @@ void Simulation::compute_forces() {
         };
         std::uint64_t history = m.wall_history[i];
         std::uint64_t history_next = 0;
+        std::uint32_t listed = m.wall_list_offsets[i];
+        const std::uint32_t listed_end = m.wall_list_offsets[i + 1];
         for (std::size_t p = 0; p < planes; ++p) {
           const double gap = (xi - m.plane_point_m[p]).dot(m.plane_normal[p]);
           const double overlap = ri - gap;
@@ -947,14 +1002,22 @@ void Simulation::compute_forces() {
           const std::uint64_t bit = wall_bit(wall);
           // squared distances: a square root per triangle was the wall loop's main cost
           const double reach_squared = reach * reach;
-          const bool near = m.mesh_boxes[mesh].squaredExteriorDistance(xi) < reach_squared;
+          // An unmoved mesh: the listed triangles, a superset of those in reach, in order.
+          const bool unmoved = m.mesh_moves_at_build[mesh] == m.mesh_moves[mesh];
+          std::uint32_t listed_begin = listed;
+          while (listed < listed_end && m.wall_list_mesh[listed] == mesh) ++listed;
+          const bool near = unmoved
+                                ? listed > listed_begin
+                                : m.mesh_boxes[mesh].squaredExteriorDistance(xi) < reach_squared;
           if (!near && (history & bit) == 0) continue;  // far, nothing to forget
           MeshSlot* slots = &m.mesh_slots[mesh][i * kMeshSlots];
           int candidates = 0;
           if (near) {
             const auto& triangles = m.mesh_triangles[mesh];
             const auto& boxes = m.mesh_triangle_boxes[mesh];
-            for (std::size_t tri = 0; tri < triangles.size() && candidates < 16; ++tri) {
+            const std::size_t searched = unmoved ? listed - listed_begin : triangles.size();
+            for (std::size_t k = 0; k < searched && candidates < 16; ++k) {
+              const std::size_t tri = unmoved ? m.wall_list_triangle[listed_begin + k] : k;
               if (boxes[tri].squaredExteriorDistance(xi) >= reach_squared) continue;
               const auto& vertices = triangles[tri].vertices_m;
               const ClosestPoint cp =

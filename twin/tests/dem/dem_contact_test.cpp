@@ -1,6 +1,7 @@
 // Contact laws against analytic answers: Hertz impact, restitution, JKR pull-off, Coulomb.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -133,6 +134,44 @@ TEST(DemMesh, SharedEdgeCountsOnce) {
   const double hertz = 4.0 / 3.0 * e_star * std::sqrt(kRadius) * std::pow(overlap, 1.5);
   EXPECT_NEAR(sim.state().force_n[0].z(), hertz, 1e-9 * hertz);
   EXPECT_NEAR(sim.state().force_n[1].z(), hertz, 1e-9 * hertz);
+}
+
+// Wall list: between neighbour builds a particle searches only the triangles of an unmoved mesh
+// that were within reach plus skin. A sphere falling from 12 mm (24 skin triggers on the way)
+// onto a floor of 200 small triangles meets it as it meets a plane: the same peak overlap,
+// and the same, found on the step the sphere reaches the floor. A list without the skin would
+// find it up to half a skin late and deeper.
+TEST(DemMesh, FallingSphereMeetsAMeshFloorAsItMeetsAPlane) {
+  const double dt = 1e-6;
+  const double speed = 0.5;  // m/s: 0.5 um per step, so a late find shows as a deeper overlap
+  const auto peak_overlap = [&](bool mesh_floor) {
+    ModelSpec spec = test::ball_model({test::hertz(1.0)}, dt, Vec3::Zero(), !mesh_floor);
+    if (mesh_floor) {
+      MeshWallSpec floor{"floor", 1, {}};
+      const double cell = 0.01;  // 10 x 10 cells of two triangles over 0.1 m x 0.1 m
+      for (int a = -5; a < 5; ++a)
+        for (int b = -5; b < 5; ++b) {
+          const Vec3 p0(a * cell, b * cell, 0);
+          const Vec3 p1((a + 1) * cell, b * cell, 0);
+          const Vec3 p2((a + 1) * cell, (b + 1) * cell, 0);
+          const Vec3 p3(a * cell, (b + 1) * cell, 0);
+          floor.triangles.push_back({{p0, p1, p2}});
+          floor.triangles.push_back({{p0, p2, p3}});
+        }
+      spec.meshes.push_back(floor);
+    }
+    Simulation sim(std::make_shared<Model>(spec));
+    sim.add_sphere({Vec3(0.0033, 0.0061, kRadius + 0.012), kRadius, 0, Vec3(0, 0, -speed)});
+    double peak = 0.0;
+    for (int k = 0; k < 30000; ++k) {
+      sim.step();
+      peak = std::max(peak, kRadius - sim.state().position_m[0].z());
+    }
+    return peak;
+  };
+  const double on_plane = peak_overlap(false);
+  ASSERT_GT(on_plane, 0.0);
+  EXPECT_NEAR(peak_overlap(true), on_plane, 1e-9 * on_plane);
 }
 
 // Conveyor: a sphere on a belt (plane with surface velocity) is dragged up to belt speed.
