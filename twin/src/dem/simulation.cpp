@@ -3,6 +3,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -944,6 +945,12 @@ void Simulation::compute_forces() {
 
     // walls
     if (wall_count > 0) {
+      std::uint64_t moved_meshes = 0;
+      for (std::size_t mesh = 0; mesh < meshes; ++mesh) {
+        if (m.mesh_moves_at_build[mesh] != m.mesh_moves[mesh])
+          moved_meshes |= wall_bit(planes + mesh);
+      }
+      const bool visit_by_bits = wall_count < 64;
       std::array<std::uint32_t, 16> candidate_triangle{};
       std::array<ClosestPoint, 16> candidate_point{};
       for (std::uint32_t i = i_begin; i < i_end; ++i) {
@@ -985,6 +992,19 @@ void Simulation::compute_forces() {
         std::uint64_t history_next = 0;
         std::uint32_t listed = m.wall_list_offsets[i];
         const std::uint32_t listed_end = m.wall_list_offsets[i + 1];
+        // Meshes to visit: listed ones, moved ones and those holding history. With under 64
+        // walls each has its own bit, and the other meshes (most, on a line) are skipped.
+        std::uint64_t visit = moved_meshes | history;
+        for (std::uint32_t e = listed; e < listed_end; ++e) {
+          visit |= wall_bit(planes + m.wall_list_mesh[e]);
+        }
+        const auto next_mesh = [&](std::size_t from) -> std::size_t {
+          if (!visit_by_bits) return from;
+          const std::size_t bit_index = planes + from;
+          if (bit_index >= 64) return meshes;
+          const std::uint64_t rest = visit & (~std::uint64_t{0} << bit_index);
+          return rest == 0 ? meshes : static_cast<std::size_t>(std::countr_zero(rest)) - planes;
+        };
         for (std::size_t p = 0; p < planes; ++p) {
           const double gap = (xi - m.plane_point_m[p]).dot(m.plane_normal[p]);
           const double overlap = ri - gap;
@@ -996,7 +1016,7 @@ void Simulation::compute_forces() {
           history_next |= bit;
           apply(p, m.plane_normal[p], overlap, xi - gap * m.plane_normal[p], m.plane_states[p][i]);
         }
-        for (std::size_t mesh = 0; mesh < meshes; ++mesh) {
+        for (std::size_t mesh = next_mesh(0); mesh < meshes; mesh = next_mesh(mesh + 1)) {
           const std::size_t wall = planes + mesh;
           const double reach = ri + m.wall_range_m[wall_row + wall];
           const std::uint64_t bit = wall_bit(wall);
