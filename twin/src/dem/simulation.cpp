@@ -945,9 +945,12 @@ void Simulation::compute_forces() {
 
     // walls
     if (wall_count > 0) {
+      // the wall list is built with the neighbour list, which every change of the particle
+      // count rebuilds before forces; without it every mesh is searched in full
+      const bool wall_list_valid = m.wall_list_offsets.size() == n + 1;
       std::uint64_t moved_meshes = 0;
       for (std::size_t mesh = 0; mesh < meshes; ++mesh) {
-        if (m.mesh_moves_at_build[mesh] != m.mesh_moves[mesh])
+        if (!wall_list_valid || m.mesh_moves_at_build[mesh] != m.mesh_moves[mesh])
           moved_meshes |= wall_bit(planes + mesh);
       }
       const bool visit_by_bits = wall_count < 64;
@@ -990,8 +993,8 @@ void Simulation::compute_forces() {
         };
         std::uint64_t history = m.wall_history[i];
         std::uint64_t history_next = 0;
-        std::uint32_t listed = m.wall_list_offsets[i];
-        const std::uint32_t listed_end = m.wall_list_offsets[i + 1];
+        std::uint32_t listed = wall_list_valid ? m.wall_list_offsets[i] : 0;
+        const std::uint32_t listed_end = wall_list_valid ? m.wall_list_offsets[i + 1] : 0;
         // Meshes to visit: listed ones, moved ones and those holding history. With under 64
         // walls each has its own bit, and the other meshes (most, on a line) are skipped.
         std::uint64_t visit = moved_meshes | history;
@@ -1023,7 +1026,7 @@ void Simulation::compute_forces() {
           // squared distances: a square root per triangle was the wall loop's main cost
           const double reach_squared = reach * reach;
           // An unmoved mesh: the listed triangles, a superset of those in reach, in order.
-          const bool unmoved = m.mesh_moves_at_build[mesh] == m.mesh_moves[mesh];
+          const bool unmoved = wall_list_valid && m.mesh_moves_at_build[mesh] == m.mesh_moves[mesh];
           std::uint32_t listed_begin = listed;
           while (listed < listed_end && m.wall_list_mesh[listed] == mesh) ++listed;
           const bool near = unmoved
@@ -1152,6 +1155,7 @@ void Simulation::compute_forces() {
       return (m.build_position_m[bond.i] - m.build_position_m[bond.j]).squaredNorm() <
              reach * reach;
     };
+    m.bond_break_handled.resize(s.bond_states.size(), 0);  // bonds added through the state
     std::size_t count = 0;
     for (std::size_t k = 0; k < s.bond_states.size(); ++k) {
       if (!s.bond_states[k].broken) continue;
