@@ -105,9 +105,9 @@ struct Simulation::Impl {
   std::vector<std::vector<Eigen::AlignedBox3d>> mesh_triangle_boxes;
   std::vector<Eigen::AlignedBox3d> mesh_boxes;
   // Per mesh: the pose its triangles were placed with, and a count of the placements that
-  // moved it. A mesh placed as at the last neighbour build is searched through the wall list.
+  // moved it (0: not placed yet). A mesh placed as at the last neighbour build is searched
+  // through the wall list.
   std::vector<WallState> mesh_pose;
-  std::vector<std::uint8_t> mesh_placed;
   std::vector<std::uint64_t> mesh_moves;
   std::vector<std::uint64_t> mesh_moves_at_build;
   // Wall list (CSR per particle): the triangles within reach plus skin at the last build, by
@@ -178,7 +178,6 @@ Simulation::Simulation(std::shared_ptr<const Model> model)
   m.mesh_triangle_boxes.resize(spec.meshes.size());
   m.mesh_boxes.resize(spec.meshes.size());
   m.mesh_pose.resize(spec.meshes.size());
-  m.mesh_placed.assign(spec.meshes.size(), 0);
   m.mesh_moves.assign(spec.meshes.size(), 0);
   m.mesh_moves_at_build.assign(spec.meshes.size(), std::numeric_limits<std::uint64_t>::max());
   m.mesh_slots.resize(spec.meshes.size());
@@ -414,13 +413,12 @@ void Simulation::update_wall_geometry() {
   for (std::size_t w = 0; w < spec.meshes.size(); ++w) {
     const WallState& ws = state.walls[spec.planes.size() + w];
     WallState& placed = m.mesh_pose[w];
-    if (m.mesh_placed[w] != 0 && placed.pivot_m == ws.pivot_m &&
+    if (m.mesh_moves[w] != 0 && placed.pivot_m == ws.pivot_m &&
         placed.translation_m == ws.translation_m &&
         placed.rotation.coeffs() == ws.rotation.coeffs()) {
       continue;  // the same pose gives the same triangles
     }
     placed = ws;
-    m.mesh_placed[w] = 1;
     ++m.mesh_moves[w];
     const auto& reference = spec.meshes[w].triangles;
     auto& current = m.mesh_triangles[w];
