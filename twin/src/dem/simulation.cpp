@@ -144,6 +144,13 @@ struct Simulation::Impl {
   std::vector<MeshSlot> scratch_slots;
   std::vector<std::uint64_t> scratch_u64;
 
+  // Centre distance below which a pair is listed: the contact reach plus the skin. The
+  // neighbour build and the check on a freed bond pair must use the same one.
+  [[nodiscard]] double listing_reach_m(double radius_i_m, double radius_j_m,
+                                       std::size_t pair_type) const {
+    return radius_i_m + radius_j_m + pair_range_m[pair_type] + skin;
+  }
+
   double last_contact_energy_j = 0.0;
   std::uint32_t next_body = 0;
   std::uint32_t next_id = 0;
@@ -737,7 +744,7 @@ void Simulation::rebuild_neighbors() {
             const std::size_t pair_type = ti * m.type_count + s.type[j];
             const Interaction& interaction = *m.interactions[pair_type];
             if (!interaction.has_contact()) continue;
-            const double reach = ri + s.radius_m[j] + m.pair_range_m[pair_type] + m.skin;
+            const double reach = m.listing_reach_m(ri, s.radius_m[j], pair_type);
             if ((xi - s.position_m[j]).squaredNorm() >= reach * reach) continue;
             if (!interaction.contact_between_bonded && stamp[j] == i + 1) continue;
             pair_j.push_back(j);
@@ -1148,8 +1155,7 @@ void Simulation::compute_forces() {
       const Interaction& interaction = *m.interactions[pair_type];
       // bonded pairs in contact are listed already, when in reach, like any other pair
       if (!interaction.has_contact() || interaction.contact_between_bonded) return false;
-      const double reach =
-          s.radius_m[bond.i] + s.radius_m[bond.j] + m.pair_range_m[pair_type] + m.skin;
+      const double reach = m.listing_reach_m(s.radius_m[bond.i], s.radius_m[bond.j], pair_type);
       return (m.build_position_m[bond.i] - m.build_position_m[bond.j]).squaredNorm() <
              reach * reach;
     };
