@@ -109,6 +109,8 @@ nlohmann::json to_json(const AccuracySummary& s) {
           {"singles_called_touching", s.singles_flagged},
           {"singulation_precision", s.singulation_precision},
           {"singulation_recall", s.singulation_recall},
+          {"near_singles", s.near_singles},
+          {"near_reported_not_singulated", s.near_reported_not_singulated},
           {"targets", target_list}};
 }
 
@@ -134,6 +136,8 @@ std::string format_summary(const std::string& name, const AccuracySummary& s) {
   text << "  singulation     touching groups flagged " << s.groups_flagged << " of " << s.groups
        << ", singles called touching " << s.singles_flagged << ": precision "
        << s.singulation_precision << ", recall " << s.singulation_recall << "\n";
+  text << "  near pairs      singles closer to another than the least gap: " << s.near_singles
+       << ", reported not singulated " << s.near_reported_not_singulated << "\n";
   return text.str();
 }
 
@@ -267,7 +271,10 @@ int vision_eval_command(const VisionEvalArgs& args) {
       std::filesystem::path(args.out_directory) / "missed";
   std::filesystem::remove_all(missed_directory);  // a rerun's misses only
   std::filesystem::create_directories(missed_directory);
-  AccuracyTally all;
+  // Pairs closer than the estimator's least gap are to be reported not singulated.
+  vision::AccuracyOptions tally_options;
+  tally_options.near_gap_mm = params.min_gap_mm;
+  AccuracyTally all(tally_options);
   std::vector<CameraTally> cameras;
   nlohmann::json per_camera = nlohmann::json::object();
   for (const std::string& path : args.recordings) {
@@ -284,7 +291,8 @@ int vision_eval_command(const VisionEvalArgs& args) {
       if (!recorded.has_frames || recorded.truth.empty() || !recorded.calibration) continue;
       any_truth = true;
       const auto camera = static_cast<CameraId>(c);
-      CameraTally camera_tally{path + " " + std::string(to_string(camera)), AccuracyTally{}};
+      CameraTally camera_tally{path + " " + std::string(to_string(camera)),
+                               AccuracyTally(tally_options)};
       vision::FilletEstimator estimator(*recorded.calibration, params);
       std::size_t frames_without_truth = 0;
       for (const auto& [sequence, frame] : recorded.frames) {

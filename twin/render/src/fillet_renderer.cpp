@@ -224,6 +224,30 @@ struct PreparedFillet {
   double fibre_cos = 1.0, fibre_sin = 0.0;
 };
 
+// A point of the sprite's frame (unscaled local mm) where it lies on the belt.
+cv::Point2d outline_point_on_belt(const PreparedFillet& p, cv::Point2d local) {
+  const double u = local.x * p.instance.scale;
+  const double v = local.y * p.instance.scale;
+  return {p.instance.x_mm + p.cos_a * u - p.sin_a * v, p.instance.y_mm + p.sin_a * u + p.cos_a * v};
+}
+
+// Least distance between two closed outlines (0 where one reaches into the other). Between
+// two polygons that do not overlap it is reached at a vertex of one of them, so each one's
+// vertices against the other's edges is exact for the polygons.
+double outline_gap_mm(const std::vector<cv::Point2f>& a, const std::vector<cv::Point2f>& b) {
+  if (a.size() < 3 || b.size() < 3) return std::numeric_limits<double>::infinity();
+  double gap = std::numeric_limits<double>::infinity();
+  for (const auto& [from, to] : {std::pair{&a, &b}, std::pair{&b, &a}}) {
+    for (const cv::Point2f& vertex : *from) {
+      // signed: positive inside, so a vertex inside the other outline gives no gap
+      const double inside_mm = cv::pointPolygonTest(*to, vertex, true);
+      gap = std::min(gap, std::max(0.0, -inside_mm));
+      if (gap == 0.0) return 0.0;
+    }
+  }
+  return gap;
+}
+
 // The appearance constants (BGR, 8-bit scale under the nominal light). Chosen to look like
 // raw chicken breast: the skin side pale pink-beige, the bone side pinker (R - G larger).
 constexpr std::array<double, 3> kSkinBgr{150.0, 168.0, 222.0};
@@ -436,15 +460,27 @@ RenderedFrame FilletRenderer::render(const RenderCamera& camera, const Scene& sc
 
   RenderedFrame frame;
   frame.bgr = detail::apply_imaging(radiance, camera, scene.imaging, scene.seed);
+  // Every silhouette's outline on the belt, for the gaps between fillets.
+  std::vector<std::vector<cv::Point2f>> outlines_mm;
+  outlines_mm.reserve(prepared.size());
   for (const auto& p : prepared) {
+    std::vector<cv::Point2f>& outline = outlines_mm.emplace_back();
+    outline.reserve(p.sprite->outline_mm.size());
+    for (const auto& local : p.sprite->outline_mm) {
+      const cv::Point2d belt = outline_point_on_belt(p, local);
+      outline.emplace_back(static_cast<float>(belt.x), static_cast<float>(belt.y));
+    }
+  }
+  for (std::size_t k = 0; k < prepared.size(); ++k) {
+    const auto& p = prepared[k];
     FilletTruth truth;
     truth.fillet = p.instance;
-    const auto to_belt = [&](cv::Point2d local) {
-      const double u = local.x * p.instance.scale;
-      const double v = local.y * p.instance.scale;
-      return cv::Point2d(p.instance.x_mm + p.cos_a * u - p.sin_a * v,
-                         p.instance.y_mm + p.sin_a * u + p.cos_a * v);
-    };
+    const auto to_belt = [&](cv::Point2d local) { return outline_point_on_belt(p, local); };
+    for (std::size_t other = 0; other < prepared.size(); ++other) {
+      if (other == k) continue;
+      truth.gap_to_nearest_mm =
+          std::min(truth.gap_to_nearest_mm, outline_gap_mm(outlines_mm[k], outlines_mm[other]));
+    }
     truth.fully_visible = true;
     for (const auto& local : p.sprite->outline_mm) {
       const cv::Point2d px = belt_to_pixel(camera, to_belt(local));

@@ -166,6 +166,42 @@ TEST(AccuracyTally, ASingleCalledTouchingLowersPrecision) {
   EXPECT_DOUBLE_EQ(s.singulation_recall, 1.0);
 }
 
+// A single closer to another fillet than the least gap (4 mm, EstimatorParams::min_gap_mm) is
+// to be reported not singulated: it is tallied as a near pair, not as a single, and is right
+// when no blob near it claims a singulated fillet. Without the option it stays a single.
+TEST(AccuracyTally, ASingleWithinTheLeastGapIsANearPair) {
+  AccuracyOptions options;
+  options.near_gap_mm = 4.0;
+  TrueFillet close = single(0.0, 0.0, 0.0, Hand::kLeft, SideUp::kSkin);
+  close.gap_mm = 3.0;  // under the least gap
+  TrueFillet clear = single(200.0, 0.0, 0.0, Hand::kLeft, SideUp::kSkin);
+  clear.gap_mm = 4.0;  // at the least gap: a single
+  FrameResult flagged;
+  flagged.blobs.push_back(fillet_blob(0.0F, 0.0F, 0.0F, Hand::kLeft, SideUp::kSkin, false));
+  flagged.blobs.push_back(fillet_blob(200.0F, 0.0F, 0.0F, Hand::kLeft, SideUp::kSkin));
+  FrameResult called_single;
+  called_single.blobs.push_back(fillet_blob(0.0F, 0.0F, 0.0F, Hand::kLeft, SideUp::kSkin));
+  FrameResult merged;  // one blob with the neighbour, beyond the match gate: no single claimed
+  merged.blobs.push_back(fillet_blob(0.0F, 40.0F, 0.0F, Hand::kUnknown, SideUp::kUnknown, false));
+
+  AccuracyTally tally(options);
+  tally.add_frame(flagged, {close, clear});
+  tally.add_frame(called_single, {close});
+  tally.add_frame(merged, {close});
+  const AccuracySummary s = tally.summary();
+  EXPECT_EQ(s.near_singles, 3U);
+  EXPECT_EQ(s.near_reported_not_singulated, 2U);  // flagged and merged; not the one called single
+  EXPECT_EQ(s.singles, 1U);                       // only the clear one
+  EXPECT_EQ(s.detected, 1U);
+  EXPECT_EQ(s.singles_flagged, 0U);
+
+  AccuracyTally without_option;
+  without_option.add_frame(flagged, {close, clear});
+  EXPECT_EQ(without_option.summary().near_singles, 0U);
+  EXPECT_EQ(without_option.summary().singles, 2U);
+  EXPECT_EQ(without_option.summary().singles_flagged, 1U);
+}
+
 TEST(AccuracyTally, ARefusedFrameIsCounted) {
   AccuracyTally tally;
   FrameResult frame;

@@ -156,6 +156,52 @@ TEST(FilletEstimator, OverlappingPairsAreFlagged) {
       {.overlapping_pair = true, .neighbours = false, .realistic = true, .nominal_shape = false});
 }
 
+// The renderer's truth gives each fillet its least gap to another, so that an evaluation can
+// tell a pair closer than the estimator's least gap (reported not singulated by design) from a
+// single. A left fillet and its mirror image (the right fillet) across a line parallel to the
+// travel are nearest at their outermost points: the gap is twice the distance from the left
+// fillet's outermost point to the line, whatever the outline's shape.
+TEST(FilletRenderer, TruthGivesTheGapBetweenSilhouettes) {
+  const auto camera = camera_640();
+  render::FilletInstance left;
+  left.x_mm = 10.0;
+  left.y_mm = -40.0;
+  left.hand = Hand::kLeft;
+  double outermost_y_mm = -1e9;
+  for (const cv::Point2d& point : renderer().silhouette_outline_mm(left)) {
+    outermost_y_mm = std::max(outermost_y_mm, point.y);
+  }
+  constexpr double kGapMm = 3.0;  // under the estimator's least gap (4 mm): the case that matters
+  const double mirror_y_mm = outermost_y_mm + 0.5 * kGapMm;
+  render::FilletInstance right = left;
+  right.hand = Hand::kRight;
+  right.y_mm = 2.0 * mirror_y_mm - left.y_mm;
+  render::Scene pair;
+  pair.fillets = {left, right};
+  const auto frame = renderer().render(camera, pair);
+  ASSERT_EQ(frame.truth.size(), 2U);
+  // The right fillet's outline polygon is the left one's mirrored, so the polygons' gap is
+  // exact; the outlines are held in float (7 digits of ~100 mm): 1 um.
+  EXPECT_NEAR(frame.truth[0].gap_to_nearest_mm, kGapMm, 1e-3);
+  EXPECT_DOUBLE_EQ(frame.truth[1].gap_to_nearest_mm, frame.truth[0].gap_to_nearest_mm);
+
+  // Alone: no neighbour at all.
+  render::Scene alone;
+  alone.fillets = {left};
+  EXPECT_TRUE(std::isinf(renderer().render(camera, alone).truth.at(0).gap_to_nearest_mm));
+
+  // A touching pair (2 mm pressed together) has no gap.
+  render::FilletInstance first = left;
+  first.y_mm = 0.0;
+  render::FilletInstance partner;
+  partner = render::make_touching_partner(renderer(), first, partner, true, 0.4, 20.0, 2.0, 1);
+  render::Scene touching;
+  touching.fillets = {first, partner};
+  const auto touching_frame = renderer().render(camera, touching);
+  EXPECT_EQ(touching_frame.truth.at(0).gap_to_nearest_mm, 0.0);
+  EXPECT_EQ(touching_frame.truth.at(1).gap_to_nearest_mm, 0.0);
+}
+
 // The renderer's overlap: the fillet lying on the other is the one seen where they overlap.
 // Rendered cleanly (no blur or noise), a pixel inside both silhouettes is the same with the
 // lower fillet present as without it; the upper one rests on the lower one's thickness, no

@@ -61,7 +61,8 @@ constexpr std::string_view kCameraTruthJsonSchema = R"json({
       "angle_rad": {"type": "number", "description": "thick end to tip, from travel, CCW"},
       "hand": {"enum": ["left", "right"]}, "side": {"enum": ["skin", "bone"]},
       "group_id": {"type": "integer", "description": "0 or more: fillets sharing it touch"},
-      "singulated": {"type": "boolean"}, "fully_visible": {"type": "boolean"}}}}
+      "singulated": {"type": "boolean"}, "fully_visible": {"type": "boolean"},
+      "gap_mm": {"type": "number", "description": "least distance to another fillet; absent: none"}}}}
   }
 })json";
 // clang-format on
@@ -246,6 +247,8 @@ void RecordingWriter::write_truth(CameraId camera, std::uint32_t sequence, std::
                     {"group_id", fillet.group_id},
                     {"singulated", fillet.singulated},
                     {"fully_visible", fillet.fully_visible}});
+    // JSON has no infinity: a fillet with no neighbour has no gap written.
+    if (std::isfinite(fillet.gap_mm)) list.back()["gap_mm"] = fillet.gap_mm;
   }
   const std::string text = nlohmann::json{
       {"camera", camera_name(camera)},
@@ -519,6 +522,13 @@ std::vector<TrueFillet> decode_truth(const Bytes& data, const std::string& where
     fillet.group_id = static_cast<int>(group_id);
     fillet.singulated = flag("singulated");
     fillet.fully_visible = flag("fully_visible");
+    // Optional (recordings before it have none): no neighbour, as the writer leaves it out.
+    if (item.contains("gap_mm")) {
+      fillet.gap_mm = number("gap_mm");
+      if (fillet.gap_mm < 0.0) {
+        throw RecordingError(at + ".gap_mm: " + item["gap_mm"].dump() + " is negative");
+      }
+    }
     fillets.push_back(fillet);
   }
   return fillets;

@@ -18,6 +18,7 @@ std::vector<TrueFillet> true_fillets(const render::RenderedFrame& frame) {
     fillet.group_id = truth.fillet.group_id;
     fillet.singulated = truth.singulated;
     fillet.fully_visible = truth.fully_visible;
+    fillet.gap_mm = truth.gap_to_nearest_mm;
     fillets.push_back(fillet);
   }
   return fillets;

@@ -156,15 +156,51 @@ TEST(RecordingTruth, RoundTripsThroughTheWriter) {
   std::filesystem::remove(path);
 }
 
+// The gap to the nearest fillet is written when there is one and left out when there is none
+// (JSON has no infinity), and reads back either way.
+TEST(RecordingTruth, GapToTheNearestFilletRoundTripsAndMayBeAbsent) {
+  const auto path = temp_file("gap.mcap");
+  TrueFillet near = touching_fillet(12.5, -1);
+  near.singulated = true;
+  near.gap_mm = 2.5;  // any gap; under the estimator's 4 mm, as the case it is written for
+  TrueFillet alone = touching_fillet(-40.0, -1);
+  alone.singulated = true;  // gap_mm stays infinite: no other fillet
+  {
+    RecordingWriter writer(path, {9, {{"source", "test"}}});
+    writer.add_camera(CameraId::kOrientation, small_calibration());
+    writer.write_frame(CameraId::kOrientation, kFrame, kExposureNs,
+                       cv::Mat(48, 64, CV_8UC3, cv::Scalar(165, 105, 35)));
+    writer.write_truth(CameraId::kOrientation, kFrame, kExposureNs, {near, alone});
+    writer.close();
+  }
+  const Recording recording = load_recording(path);
+  const std::vector<TrueFillet>& fillets =
+      recording.cameras[index(CameraId::kOrientation)].truth.at(kFrame);
+  ASSERT_EQ(fillets.size(), 2U);
+  EXPECT_EQ(fillets[0].gap_mm, 2.5);
+  EXPECT_TRUE(std::isinf(fillets[1].gap_mm));
+  std::filesystem::remove(path);
+}
+
+TEST(RecordingTruth, BadGapNamesTheField) {
+  expect_truth_error(message_text(fillet_with("gap_mm", "-0.5")),  // a distance is not negative
+                     {"fillets[0].gap_mm: -0.5 is negative"});
+  expect_truth_error(message_text(fillet_with("gap_mm", "\"3\"")),
+                     {"fillets[0].gap_mm: \"3\" is not a number"});
+  expect_truth_error(message_text(fillet_with("gap_mm", "null")),  // an infinity written as null
+                     {"fillets[0].gap_mm: null"});
+}
+
 TEST(RecordingTruth, HandMadeMessageLikeTheWritersLoads) {
   // The hand-made messages below differ from this one in one field only: it must load.
   const auto path = temp_file("good.mcap");
   write_truth_message(path, message_text(fillet_with("x_mm", "12.5")));
   const Recording recording = load_recording(path);
   const auto& truth = recording.cameras[index(CameraId::kOrientation)].truth;
-  ASSERT_EQ(truth.count(kFrame), 1U);          // the one message
-  ASSERT_EQ(truth.at(kFrame).size(), 1U);      // its one fillet
-  EXPECT_EQ(truth.at(kFrame)[0].group_id, 4);  // good_fillet()'s group
+  ASSERT_EQ(truth.count(kFrame), 1U);                   // the one message
+  ASSERT_EQ(truth.at(kFrame).size(), 1U);               // its one fillet
+  EXPECT_EQ(truth.at(kFrame)[0].group_id, 4);           // good_fillet()'s group
+  EXPECT_TRUE(std::isinf(truth.at(kFrame)[0].gap_mm));  // none given: no neighbour
   std::filesystem::remove(path);
 }
 

@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,8 @@ struct TrueFillet {
   int group_id = -1;          // >= 0: the fillets sharing it touch
   bool singulated = true;     // no other fillet shares its group
   bool fully_visible = true;  // the whole silhouette is inside the image
+  // Least distance from its silhouette to another fillet's (infinity: none, or not recorded).
+  double gap_mm = std::numeric_limits<double>::infinity();
 };
 
 struct AccuracyOptions {
@@ -41,6 +44,10 @@ struct AccuracyOptions {
   double match_gate_mm = 30.0;
   // A touching group's blob centre can lie half a fillet length from any member's pose.
   double group_gate_mm = 100.0;
+  // A single closer than this to another fillet is a near pair: the estimator reports such a
+  // pair not singulated by design (EstimatorParams::min_gap_mm, the least gap the flip
+  // plates handle), so it is tallied apart from the singles. 0: every single is a single.
+  double near_gap_mm = 0.0;
 };
 
 // Confusion matrix: rows the truth (left/right or skin/bone), columns the estimate
@@ -71,6 +78,10 @@ struct AccuracySummary {
   std::uint64_t singles_flagged = 0;  // false positives: a single called touching
   double singulation_precision = 1.0;
   double singulation_recall = 1.0;
+  // Near pairs: singles wholly in view closer than near_gap_mm to another fillet, and how many
+  // of them were reported not singulated (a flagged blob, or one blob with the neighbour).
+  std::uint64_t near_singles = 0;
+  std::uint64_t near_reported_not_singulated = 0;
 };
 
 // A single fillet wholly in view that no fillet blob matched, and what the estimator saw

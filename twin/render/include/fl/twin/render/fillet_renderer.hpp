@@ -30,6 +30,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -123,7 +124,11 @@ struct FilletTruth {
   FilletInstance fillet;
   bool fully_visible = false;  // the whole silhouette lies inside the image (3 px margin)
   bool singulated = true;      // no other fillet shares its group
-  cv::Point2d centre_px;       // image position of the pose
+  // Least distance between its silhouette and another fillet's of the scene (0 where they
+  // touch or overlap; infinity when it is alone). A pair closer than the vision's least gap
+  // is meant to be reported not singulated although its silhouettes do not touch.
+  double gap_to_nearest_mm = std::numeric_limits<double>::infinity();
+  cv::Point2d centre_px;  // image position of the pose
   double silhouette_area_mm2 = 0.0;
   // Belt position of the silhouette's area centroid (the pose is the volume centroid).
   cv::Point2d silhouette_centroid_mm;
