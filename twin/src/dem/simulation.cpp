@@ -96,6 +96,8 @@ struct Simulation::Impl {
   std::vector<std::vector<std::uint32_t>> build_pair_j;
   std::vector<std::vector<PairState>> build_pair_states;
   std::vector<std::vector<std::uint32_t>> build_stamps;
+  std::vector<std::vector<std::uint32_t>> build_wall_mesh;
+  std::vector<std::vector<std::uint32_t>> build_wall_triangle;
 
   // walls: current geometry and history
   std::vector<Vec3> plane_point_m;
@@ -701,6 +703,12 @@ void Simulation::rebuild_neighbors() {
   m.build_pair_j.resize(build_threads);
   m.build_pair_states.resize(build_threads);
   m.build_stamps.resize(build_threads);
+  m.build_wall_mesh.resize(build_threads);
+  m.build_wall_triangle.resize(build_threads);
+  const ModelSpec& spec = model_->spec();
+  const std::size_t planes = spec.planes.size();
+  const std::size_t wall_count = planes + spec.meshes.size();
+  m.wall_list_offsets.resize(n + 1);
   m.build_begin.assign(build_threads + 1, 0);
   for (std::size_t t = 0; t <= build_threads; ++t) {
     m.build_begin[t] = static_cast<std::uint32_t>(n * t / build_threads);
@@ -711,8 +719,12 @@ void Simulation::rebuild_neighbors() {
     std::vector<std::uint32_t>& pair_j = m.build_pair_j[t];
     std::vector<PairState>& pair_states = m.build_pair_states[t];
     std::vector<std::uint32_t>& stamp = m.build_stamps[t];  // i + 1 at i's bonded partners
+    std::vector<std::uint32_t>& wall_mesh = m.build_wall_mesh[t];
+    std::vector<std::uint32_t>& wall_triangle = m.build_wall_triangle[t];
     pair_j.clear();
     pair_states.clear();
+    wall_mesh.clear();
+    wall_triangle.clear();
     stamp.assign(n, 0);
     const std::uint32_t i_begin = m.build_begin[t];
     const std::uint32_t i_end = m.build_begin[t + 1];
@@ -767,6 +779,21 @@ void Simulation::rebuild_neighbors() {
         }
         pair_states.push_back(state);
       }
+
+      // 7. wall list: the triangles within reach plus skin, by mesh then triangle
+      m.wall_list_offsets[i] = static_cast<std::uint32_t>(wall_mesh.size());  // local, as above
+      const std::size_t wall_row = ti * wall_count;
+      for (std::size_t mesh = 0; mesh < spec.meshes.size(); ++mesh) {
+        const double reach = ri + m.wall_range_m[wall_row + planes + mesh] + m.skin;
+        const double reach_squared = reach * reach;
+        if (m.mesh_boxes[mesh].squaredExteriorDistance(xi) >= reach_squared) continue;
+        const auto& boxes = m.mesh_triangle_boxes[mesh];
+        for (std::size_t tri = 0; tri < boxes.size(); ++tri) {
+          if (boxes[tri].squaredExteriorDistance(xi) >= reach_squared) continue;
+          wall_mesh.push_back(static_cast<std::uint32_t>(mesh));
+          wall_triangle.push_back(static_cast<std::uint32_t>(tri));
+        }
+      }
     }
   }
   std::size_t total_pairs = 0;
@@ -787,6 +814,26 @@ void Simulation::rebuild_neighbors() {
   }
   m.pair_offsets[n] = static_cast<std::uint32_t>(m.pair_j.size());
   std::copy(s.position_m.begin(), s.position_m.end(), m.build_position_m.begin());
+  // The threads' wall lists joined in thread order: the same list for any thread count.
+  std::size_t total_listed = 0;
+  for (std::size_t t = 0; t < build_threads; ++t) {
+    const auto shift = static_cast<std::uint32_t>(total_listed);
+    for (std::uint32_t i = m.build_begin[t]; i < m.build_begin[t + 1]; ++i) {
+      m.wall_list_offsets[i] += shift;
+    }
+    total_listed += m.build_wall_mesh[t].size();
+  }
+  m.wall_list_mesh.resize(total_listed);
+  m.wall_list_triangle.resize(total_listed);
+  for (std::size_t t = 0, at = 0; t < build_threads; ++t) {
+    std::copy(m.build_wall_mesh[t].begin(), m.build_wall_mesh[t].end(),
+              m.wall_list_mesh.begin() + static_cast<std::ptrdiff_t>(at));
+    std::copy(m.build_wall_triangle[t].begin(), m.build_wall_triangle[t].end(),
+              m.wall_list_triangle.begin() + static_cast<std::ptrdiff_t>(at));
+    at += m.build_wall_mesh[t].size();
+  }
+  m.wall_list_offsets[n] = static_cast<std::uint32_t>(total_listed);
+  m.mesh_moves_at_build = m.mesh_moves;
 
   // 6. thread ranges balanced by pair count (plus a share per particle for walls)
   const std::size_t threads = static_cast<std::size_t>(m.active_threads);
@@ -804,34 +851,6 @@ void Simulation::rebuild_neighbors() {
   if (m.prepared && m.forces_valid && list_capacity() != capacity_before) {
     ++stats_.neighbor_capacity_growths;
   }
-  // 7. wall list: each particle's triangles within reach plus skin
-  {
-    const ModelSpec& spec = model_->spec();
-    const std::size_t planes = spec.planes.size();
-    const std::size_t wall_count = planes + spec.meshes.size();
-    m.wall_list_offsets.resize(n + 1);
-    m.wall_list_mesh.clear();
-    m.wall_list_triangle.clear();
-    for (std::size_t k = 0; k < n; ++k) {
-      m.wall_list_offsets[k] = static_cast<std::uint32_t>(m.wall_list_mesh.size());
-      const Vec3& xi = s.position_m[k];
-      const std::size_t wall_row = s.type[k] * wall_count;
-      for (std::size_t mesh = 0; mesh < spec.meshes.size(); ++mesh) {
-        const double reach = s.radius_m[k] + m.wall_range_m[wall_row + planes + mesh] + m.skin;
-        const double reach_squared = reach * reach;
-        if (m.mesh_boxes[mesh].squaredExteriorDistance(xi) >= reach_squared) continue;
-        const auto& boxes = m.mesh_triangle_boxes[mesh];
-        for (std::size_t tri = 0; tri < boxes.size(); ++tri) {
-          if (boxes[tri].squaredExteriorDistance(xi) >= reach_squared) continue;
-          m.wall_list_mesh.push_back(static_cast<std::uint32_t>(mesh));
-          m.wall_list_triangle.push_back(static_cast<std::uint32_t>(tri));
-        }
-      }
-    }
-    m.wall_list_offsets[n] = static_cast<std::uint32_t>(m.wall_list_mesh.size());
-    m.mesh_moves_at_build = m.mesh_moves;
-  }
-
   stats_.neighbor_pairs = m.pair_j.size();
   ++stats_.neighbor_rebuilds;
   m.rebuild_requested = false;
