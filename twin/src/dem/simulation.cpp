@@ -52,6 +52,31 @@ void gather(std::vector<T>& values, std::vector<T>& scratch,
   values.swap(scratch);
 }
 
+// Joins per-thread lists (CSR segments of two parallel arrays, each thread's offsets local
+// to its own buffers) in thread order: the joined list is the same for any thread count.
+template <typename A, typename B>
+void join_thread_segments(const std::vector<std::uint32_t>& thread_begin,
+                          const std::vector<std::vector<A>>& parts_a,
+                          const std::vector<std::vector<B>>& parts_b,
+                          std::vector<std::uint32_t>& offsets, std::vector<A>& joined_a,
+                          std::vector<B>& joined_b) {
+  std::size_t total = 0;
+  for (std::size_t t = 0; t < parts_a.size(); ++t) {
+    const auto shift = static_cast<std::uint32_t>(total);
+    for (std::uint32_t i = thread_begin[t]; i < thread_begin[t + 1]; ++i) offsets[i] += shift;
+    total += parts_a[t].size();
+  }
+  joined_a.resize(total);
+  joined_b.resize(total);
+  for (std::size_t t = 0, at = 0; t < parts_a.size(); ++t) {
+    const auto to = static_cast<std::ptrdiff_t>(at);
+    std::copy(parts_a[t].begin(), parts_a[t].end(), joined_a.begin() + to);
+    std::copy(parts_b[t].begin(), parts_b[t].end(), joined_b.begin() + to);
+    at += parts_a[t].size();
+  }
+  offsets.back() = static_cast<std::uint32_t>(total);
+}
+
 }  // namespace
 
 struct Simulation::Impl {
@@ -796,43 +821,11 @@ void Simulation::rebuild_neighbors() {
       }
     }
   }
-  std::size_t total_pairs = 0;
-  for (std::size_t t = 0; t < build_threads; ++t) {
-    const auto shift = static_cast<std::uint32_t>(total_pairs);
-    for (std::uint32_t i = m.build_begin[t]; i < m.build_begin[t + 1]; ++i) {
-      m.pair_offsets[i] += shift;
-    }
-    total_pairs += m.build_pair_j[t].size();
-  }
-  m.pair_j.resize(total_pairs);
-  m.pair_states.resize(total_pairs);
-  for (std::size_t t = 0, at = 0; t < build_threads; ++t) {
-    std::copy(m.build_pair_j[t].begin(), m.build_pair_j[t].end(), m.pair_j.begin() + at);
-    std::copy(m.build_pair_states[t].begin(), m.build_pair_states[t].end(),
-              m.pair_states.begin() + at);
-    at += m.build_pair_j[t].size();
-  }
-  m.pair_offsets[n] = static_cast<std::uint32_t>(m.pair_j.size());
+  join_thread_segments(m.build_begin, m.build_pair_j, m.build_pair_states, m.pair_offsets, m.pair_j,
+                       m.pair_states);
   std::copy(s.position_m.begin(), s.position_m.end(), m.build_position_m.begin());
-  // The threads' wall lists joined in thread order: the same list for any thread count.
-  std::size_t total_listed = 0;
-  for (std::size_t t = 0; t < build_threads; ++t) {
-    const auto shift = static_cast<std::uint32_t>(total_listed);
-    for (std::uint32_t i = m.build_begin[t]; i < m.build_begin[t + 1]; ++i) {
-      m.wall_list_offsets[i] += shift;
-    }
-    total_listed += m.build_wall_mesh[t].size();
-  }
-  m.wall_list_mesh.resize(total_listed);
-  m.wall_list_triangle.resize(total_listed);
-  for (std::size_t t = 0, at = 0; t < build_threads; ++t) {
-    std::copy(m.build_wall_mesh[t].begin(), m.build_wall_mesh[t].end(),
-              m.wall_list_mesh.begin() + static_cast<std::ptrdiff_t>(at));
-    std::copy(m.build_wall_triangle[t].begin(), m.build_wall_triangle[t].end(),
-              m.wall_list_triangle.begin() + static_cast<std::ptrdiff_t>(at));
-    at += m.build_wall_mesh[t].size();
-  }
-  m.wall_list_offsets[n] = static_cast<std::uint32_t>(total_listed);
+  join_thread_segments(m.build_begin, m.build_wall_mesh, m.build_wall_triangle, m.wall_list_offsets,
+                       m.wall_list_mesh, m.wall_list_triangle);
   m.mesh_moves_at_build = m.mesh_moves;
 
   // 6. thread ranges balanced by pair count (plus a share per particle for walls)
