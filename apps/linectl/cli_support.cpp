@@ -147,6 +147,8 @@ RuntimeOptions watchdog_runtime_options(const LineConfig& line) {
   options.period_ns = std::llround(static_cast<double>(line.watchdog.cycle_period_s) * 1e9);
   options.overrun_fault_consecutive =
       static_cast<std::uint32_t>(std::max(line.watchdog.overrun_fault_cycles, 0));
+  options.watchdog_periods =
+      static_cast<std::uint32_t>(std::max(line.watchdog.stall_fault_cycles, 0));
   return options;
 }
 

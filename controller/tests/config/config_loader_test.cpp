@@ -198,6 +198,8 @@ std::vector<std::string> compare(const LineConfig& loaded, const LineConfig& exp
           expected.watchdog.cycle_period_s);
   c.same("watchdog.overrun_fault_cycles", loaded.watchdog.overrun_fault_cycles,
          expected.watchdog.overrun_fault_cycles);
+  c.same("watchdog.stall_fault_cycles", loaded.watchdog.stall_fault_cycles,
+         expected.watchdog.stall_fault_cycles);
   return c.differences();
 }
 
@@ -209,12 +211,12 @@ TEST(LineConfigFile, ReferenceFileEqualsDefaultConfig) {
 }
 
 TEST(LineConfigFile, ComparisonCoversEveryField) {
-  // 600 bytes is LineConfig on this ABI as compare() knows it (150 four-byte fields and
+  // 604 bytes is LineConfig on this ABI as compare() knows it (151 four-byte fields and
   // paddings). A new field changes the size: add it to compare(), the loader and line.yaml.
-  EXPECT_EQ(sizeof(LineConfig), 600U);
+  EXPECT_EQ(sizeof(LineConfig), 604U);
   // The comparison must see a change in the last field of the last block.
   LineConfig changed = default_line_config();
-  changed.watchdog.overrun_fault_cycles += 1;  // any change will do
+  changed.watchdog.stall_fault_cycles += 1;  // any change will do
   EXPECT_EQ(compare(changed, default_line_config()).size(), 1U);
 }
 
@@ -389,6 +391,22 @@ TEST(LineConfigFile, PlatesGateMissingMeansTheBeltsGate) {
   text.erase(text.find(key), key.size());
   const LineConfig loaded = parse_line_config(text, "line.yaml");
   EXPECT_FLOAT_EQ(loaded.tracking.plates_gate_mm, loaded.tracking.match_gate_mm);
+}
+
+// Likewise a line.yaml from before watchdog.stall_fault_cycles: the runtime's fixed 10 periods.
+TEST(LineConfigFile, StallLimitMissingMeansTenPeriods) {
+  std::string text = reference_text();
+  const std::string key = "  stall_fault_cycles: 10";
+  ASSERT_NE(text.find(key), std::string::npos);
+  text.erase(text.find(key), text.find('\n', text.find(key)) + 1 - text.find(key));
+  EXPECT_EQ(parse_line_config(text, "line.yaml").watchdog.stall_fault_cycles, 10);
+}
+
+TEST(LineConfigErrors, StallLimitOfOnePeriodIsRefused) {
+  // One period without a scan is the scheduler's jitter alone: it would fault a healthy line.
+  const std::string text =
+      replaced(reference_text(), "  stall_fault_cycles: 10", "  stall_fault_cycles: 1");
+  EXPECT_THAT(parse_error(text).what(), HasSubstr("watchdog.stall_fault_cycles"));
 }
 
 TEST(LineConfigErrors, PlatesGateNarrowerThanTheBeltsGate) {

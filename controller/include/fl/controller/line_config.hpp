@@ -123,6 +123,8 @@ struct TrackingConfig {
 struct WatchdogConfig {
   float cycle_period_s = 0.01F;
   std::int32_t overrun_fault_cycles = 3;  // consecutive overruns that fault the line
+  // Periods without a scan starting before the watchdog faults the line (scan stalled).
+  std::int32_t stall_fault_cycles = 10;
 };
 
 struct LineConfig {
