@@ -461,30 +461,34 @@ RenderedFrame FilletRenderer::render(const RenderCamera& camera, const Scene& sc
 
   RenderedFrame frame;
   frame.bgr = detail::apply_imaging(radiance, camera, scene.imaging, scene.seed);
-  // Every silhouette's outline on the belt, for the gaps between fillets.
-  std::vector<std::vector<cv::Point2f>> outlines_mm;
-  outlines_mm.reserve(prepared.size());
-  for (const auto& p : prepared) {
-    std::vector<cv::Point2f>& outline = outlines_mm.emplace_back();
-    outline.reserve(p.sprite->outline_mm.size());
-    for (const auto& local : p.sprite->outline_mm) {
-      const cv::Point2d belt = outline_point_on_belt(p, local);
-      outline.emplace_back(static_cast<float>(belt.x), static_cast<float>(belt.y));
+  // Every silhouette's outline on the belt (double for the visibility test, float for OpenCV's
+  // polygon distance), and each fillet's least gap to another: the gap is symmetric, so each
+  // pair is measured once.
+  std::vector<std::vector<cv::Point2d>> outlines_mm(prepared.size());
+  std::vector<std::vector<cv::Point2f>> outlines_f_mm(prepared.size());
+  for (std::size_t k = 0; k < prepared.size(); ++k) {
+    for (const auto& local : prepared[k].sprite->outline_mm) {
+      const cv::Point2d belt = outline_point_on_belt(prepared[k], local);
+      outlines_mm[k].push_back(belt);
+      outlines_f_mm[k].emplace_back(static_cast<float>(belt.x), static_cast<float>(belt.y));
+    }
+  }
+  std::vector<double> gap_mm(prepared.size(), std::numeric_limits<double>::infinity());
+  for (std::size_t k = 0; k < prepared.size(); ++k) {
+    for (std::size_t other = k + 1; other < prepared.size(); ++other) {
+      const double gap = outline_gap_mm(outlines_f_mm[k], outlines_f_mm[other]);
+      gap_mm[k] = std::min(gap_mm[k], gap);
+      gap_mm[other] = std::min(gap_mm[other], gap);
     }
   }
   for (std::size_t k = 0; k < prepared.size(); ++k) {
     const auto& p = prepared[k];
     FilletTruth truth;
     truth.fillet = p.instance;
-    const auto to_belt = [&](cv::Point2d local) { return outline_point_on_belt(p, local); };
-    for (std::size_t other = 0; other < prepared.size(); ++other) {
-      if (other == k) continue;
-      truth.gap_to_nearest_mm =
-          std::min(truth.gap_to_nearest_mm, outline_gap_mm(outlines_mm[k], outlines_mm[other]));
-    }
+    truth.gap_to_nearest_mm = gap_mm[k];
     truth.fully_visible = true;
-    for (const auto& local : p.sprite->outline_mm) {
-      const cv::Point2d px = belt_to_pixel(camera, to_belt(local));
+    for (const cv::Point2d& belt : outlines_mm[k]) {
+      const cv::Point2d px = belt_to_pixel(camera, belt);
       const double m = kFullyVisibleMarginPx;
       if (px.x < m || px.y < m || px.x > camera.width_px - 1.0 - m ||
           px.y > camera.height_px - 1.0 - m) {
@@ -499,7 +503,7 @@ RenderedFrame FilletRenderer::render(const RenderCamera& camera, const Scene& sc
         }) == 1;
     truth.centre_px = belt_to_pixel(camera, {p.instance.x_mm, p.instance.y_mm});
     truth.silhouette_area_mm2 = p.sprite->area_mm2 * p.instance.scale * p.instance.scale;
-    truth.silhouette_centroid_mm = to_belt(p.sprite->area_centroid_mm);
+    truth.silhouette_centroid_mm = outline_point_on_belt(p, p.sprite->area_centroid_mm);
     frame.truth.push_back(truth);
   }
   return frame;
