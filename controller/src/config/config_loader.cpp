@@ -193,8 +193,8 @@ void read_stations(YamlMapReader& root, LineConfig& config) {
         watchdog.read_int<std::int32_t>("overrun_fault_cycles", Range::at_least(1.0));
     // Optional: before this key the stall limit was the runtime's fixed 10 periods. At least
     // 2, since one period without a scan is what the scheduler's wake-up jitter alone gives.
-    c.stall_fault_cycles =
-        watchdog.read_int_or<std::int32_t>("stall_fault_cycles", 10, Range::closed(2.0, 1000.0));
+    c.stall_fault_cycles = watchdog.read_int_or<std::int32_t>(
+        "stall_fault_cycles", WatchdogConfig{}.stall_fault_cycles, Range::closed(2.0, 1000.0));
   }
 }
 
