@@ -287,6 +287,7 @@ Table TwinBendModel::run(const Dataset& dataset, const Trial& trial) {
   params.overhang_share = overhang_m / length_m;
   params.duration_s = settings_.duration_s;
   params.clamp_behind_edge_m = settings_.clamp_behind_edge_m;
+  params.rest_damping_per_s = settings_.rest_damping_per_s;
   const model_tests::BendResult result = model_tests::run_bend(params);
   if (result.slid_off || !std::isfinite(result.angle_deg)) {
     throw std::runtime_error("the bend model's fillet slid off the table");

@@ -82,12 +82,25 @@ BendResult run_bend(const BendParams& params) {
       s.angular_velocity_rad_per_s[k].setZero();
     }
   };
+  if (!(params.rest_damping_per_s >= 0.0)) {
+    throw std::invalid_argument("bend: rest_damping_per_s must be 0 or more");
+  }
+  // Exact decay of dv/dt = -c v over one step, so no step size can overshoot.
+  const double rest_decay_per_step = std::exp(-params.rest_damping_per_s * spec.timestep_s);
+  auto damp = [&] {
+    dem::State& s = sim.mutable_state();
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      s.velocity_m_per_s[k] *= rest_decay_per_step;
+      s.angular_velocity_rad_per_s[k] *= rest_decay_per_step;
+    }
+  };
   const auto steps_per_sample = static_cast<std::size_t>(
       std::max(1.0, std::round(params.sample_interval_s / spec.timestep_s)));
   Vec3 edge = edge0;
   while (sim.state().time_s < params.duration_s) {
     for (std::size_t k = 0; k < steps_per_sample; ++k) {
       sim.step(1);
+      if (params.rest_damping_per_s > 0.0) damp();
       if (params.clamp_behind_edge_m > 0.0) hold();
     }
     Vec3 tip;

@@ -56,6 +56,8 @@ ModelTestsConfig read(YamlReader& reader) {
       c.bend.clamp_behind_edge_m = m.read_double("clamp_behind_edge_m", Range::non_negative());
       c.bend.duration_s = m.read_double("duration_s", Range::positive());
       c.bend.sample_interval_s = m.read_double("sample_interval_s", Range::positive());
+      c.bend.rest_damping_per_s =
+          m.read_double_or("rest_damping_per_s", c.bend.rest_damping_per_s, Range::non_negative());
       c.bend_stiffness_factors = read_list(m, "stiffness_factors", Range::positive());
       m.finish();
     }

@@ -158,6 +158,38 @@ TEST(ModelTestsBend, AngleFiniteAndFallsWithStiffness) {
   EXPECT_LT(stiff.angle_deg, soft.angle_deg - 5.0);
 }
 
+// A measured fillet is read at rest; the thesis' bonds have no damping, so the test damps the
+// motion (as LAMMPS' fix viscous) to find where the forces balance. The damped fillet must come
+// to rest, and rest inside the undamped swing: an oscillation turns about its equilibrium.
+// The damping takes energy out and does not move the balance, so two rates rest at one angle
+// up to the path: the table edge's friction holds the fillet where it first stops sliding.
+TEST(ModelTestsBend, RestDampingEndsAtRestInsideTheUndampedSwing) {
+  BendParams params;
+  params.common = fast_common();
+  params.common.sub_particle_radius_m = 0.005;  // as above: a tip of more than one layer
+  params.duration_s = 1.0;
+  const BendResult swinging = run_bend(params);
+  params.rest_damping_per_s = 20.0;
+  const BendResult resting = run_bend(params);
+  params.rest_damping_per_s = 40.0;
+  const BendResult resting_faster = run_bend(params);
+  std::cout << "bend: undamped " << swinging.angle_deg << " deg [" << swinging.angle_min_deg << ", "
+            << swinging.angle_max_deg << "], at rest (20/s) " << resting.angle_deg << " ["
+            << resting.angle_min_deg << ", " << resting.angle_max_deg << "], (40/s) "
+            << resting_faster.angle_deg << "\n";
+  ASSERT_FALSE(resting.slid_off);
+  // At rest: the last quarter's motion is under a tenth of a degree (the undamped swing spans
+  // tens of degrees, so this cannot pass by chance).
+  EXPECT_LT(resting.angle_max_deg - resting.angle_min_deg, 0.1);
+  EXPECT_GT(swinging.angle_max_deg - swinging.angle_min_deg, 10.0);
+  EXPECT_GT(resting.angle_deg, swinging.angle_min_deg);
+  EXPECT_LT(resting.angle_deg, swinging.angle_max_deg);
+  // One degree: the path's share, as the 7 mm fillet's 68.1 and 68.0 deg at 20 and 40/s.
+  EXPECT_NEAR(resting_faster.angle_deg, resting.angle_deg, 1.0);
+  params.rest_damping_per_s = -1.0;
+  EXPECT_THROW((void)run_bend(params), std::invalid_argument);
+}
+
 // ---------------------------------------------------------------- stability
 
 // All bonds hold at a safe timestep (0.1 x bond critical) and the model blows up at three

@@ -71,11 +71,15 @@ class TwinDropModel final : public TrialModel {
 };
 
 // How the bend twin holds its fillet: bend test (thesis 3.4.1, figure 3.11). 2 s is the thesis'
-// run; the answer is the mean angle over its last quarter (the bonds have no damping of their
-// own, so an undamped fillet swings about that mean).
+// run; the answer is the mean angle over its last quarter. A measured fillet is read at rest,
+// and the thesis' bonds have no damping, so the twin damps the motion (model_tests::BendParams::
+// rest_damping_per_s) until it rests where its forces balance: undamped, the appendix-B fillet
+// still swings from 58 to 80 deg in the last quarter, and the swing's mean is 2 deg off the rest
+// angle. At 20/s the 7 mm fillet's angle moves under 0.1 deg in the last quarter.
 struct BendSettings {
   double duration_s = 2.0;
   double clamp_behind_edge_m = 0.03;  // spheres further behind the edge are held (a hand)
+  double rest_damping_per_s = 20.0;   // 0: the thesis' undamped swing, answered by its mean
 };
 
 // Bend test: a fillet of the trial's `variant` and `mirrored` flag lying flat on a table of the

@@ -74,6 +74,11 @@ struct BendParams {
   double clamp_behind_edge_m = 0.03;
   double duration_s = 2.0;
   double sample_interval_s = 0.01;
+  // Mass-proportional damping of every sphere's velocity and spin (1/s), as LAMMPS' fix
+  // viscous: it takes energy out of the swing and leaves the static equilibrium where it is,
+  // so the run ends at the angle a fillet comes to rest at on a lab table. 0: the thesis' run,
+  // whose bonds have no damping, so the hanging part swings for seconds.
+  double rest_damping_per_s = 0.0;
 };
 
 struct BendSample {
@@ -87,7 +92,8 @@ struct BendResult {
   std::vector<BendSample> series;
   // Angle through which the chord from the edge section to the tip turned down from its
   // start (0: rigid; 90: hanging straight down; > 90: curled back under the edge), averaged
-  // over the last quarter of the run, and its range there (the bonds have no damping).
+  // over the last quarter of the run, and its range there: the swing without rest damping,
+  // the residual motion with it.
   double angle_deg = 0.0;
   double angle_min_deg = 0.0;
   double angle_max_deg = 0.0;
