@@ -222,27 +222,33 @@ std::string recording_stem(const std::string& path) {
   return std::filesystem::path(path).stem().string();
 }
 
-// The frame of a missed single with its true pose drawn on it (a cross at the pose, a line
-// 40 mm towards the tip) and why it was missed, for a person to look at.
-void write_missed_frame(const std::filesystem::path& path, const cv::Mat& image,
-                        const vision::BeltCalibration& calibration,
-                        const vision::MissedSingle& miss) {
+// A frame with a single's true pose drawn on it (a cross at the pose, a line 40 mm towards
+// the tip) and what went wrong there, for a person to look at.
+void write_marked_frame(const std::filesystem::path& path, const cv::Mat& image,
+                        const vision::BeltCalibration& calibration, double x_mm, double y_mm,
+                        double angle_rad, const std::string& text) {
   cv::Mat marked;
   if (image.channels() == 1) {
     cv::cvtColor(image, marked, cv::COLOR_GRAY2BGR);
   } else {
     marked = image.clone();
   }
-  const cv::Point2d pose_px = calibration.belt_to_pixel({miss.x_mm, miss.y_mm});
+  const cv::Point2d pose_px = calibration.belt_to_pixel({x_mm, y_mm});
   const cv::Point2d tip_px = calibration.belt_to_pixel(
-      {miss.x_mm + 40.0 * std::cos(miss.angle_rad), miss.y_mm + 40.0 * std::sin(miss.angle_rad)});
+      {x_mm + 40.0 * std::cos(angle_rad), y_mm + 40.0 * std::sin(angle_rad)});
   const cv::Scalar magenta(255, 0, 255);
   cv::drawMarker(marked, pose_px, magenta, cv::MARKER_CROSS, 15, 2);
   cv::line(marked, pose_px, tip_px, magenta, 2);
-  cv::putText(marked, miss.why, {5, marked.rows - 8}, cv::FONT_HERSHEY_SIMPLEX, 0.45, magenta, 1);
+  cv::putText(marked, text, {5, marked.rows - 8}, cv::FONT_HERSHEY_SIMPLEX, 0.45, magenta, 1);
   if (!cv::imwrite(path.string(), marked)) {
     spdlog::warn("{}: cannot write", path.string());
   }
+}
+
+std::string misjudged_text(const vision::MisjudgedSingle& wrong) {
+  return fmt::format("truth {} {}, seen {} {} (confidence {:.2f})", to_string(wrong.true_hand),
+                     to_string(wrong.true_side), to_string(wrong.seen_hand),
+                     to_string(wrong.seen_side), wrong.confidence);
 }
 
 }  // namespace
@@ -267,10 +273,15 @@ int vision_eval_command(const VisionEvalArgs& args) {
       estimator_options(args.estimator_settings);
   if (!estimator_params) return 2;
   const vision::EstimatorParams& params = *estimator_params;
+  // Frames of missed singles, and of detected singles with the wrong hand or side.
   const std::filesystem::path missed_directory =
       std::filesystem::path(args.out_directory) / "missed";
-  std::filesystem::remove_all(missed_directory);  // a rerun's misses only
-  std::filesystem::create_directories(missed_directory);
+  const std::filesystem::path misjudged_directory =
+      std::filesystem::path(args.out_directory) / "misjudged";
+  for (const auto& directory : {missed_directory, misjudged_directory}) {
+    std::filesystem::remove_all(directory);  // a rerun's frames only
+    std::filesystem::create_directories(directory);
+  }
   // Pairs closer than the estimator's least gap are to be reported not singulated.
   vision::AccuracyOptions tally_options;
   tally_options.near_gap_mm = params.min_gap_mm;
@@ -310,12 +321,23 @@ int vision_eval_command(const VisionEvalArgs& args) {
         }
         const vision::FrameResult result = estimator.estimate(image, frame.exposure_ns, sequence);
         const std::size_t missed_before = camera_tally.tally.missed_singles().size();
+        const std::size_t misjudged_before = camera_tally.tally.misjudged_singles().size();
         camera_tally.tally.add_frame(result, truth->second);
+        const auto frame_file = [&](const std::filesystem::path& directory, std::size_t index) {
+          return directory / fmt::format("{}_{}_{}_{}.png", recording_stem(path), to_string(camera),
+                                         sequence, index);
+        };
         for (std::size_t m = missed_before; m < camera_tally.tally.missed_singles().size(); ++m) {
           const vision::MissedSingle& miss = camera_tally.tally.missed_singles()[m];
-          write_missed_frame(missed_directory / fmt::format("{}_{}_{}.png", recording_stem(path),
-                                                            to_string(camera), miss.sequence),
-                             image, *recorded.calibration, miss);
+          write_marked_frame(frame_file(missed_directory, m - missed_before), image,
+                             *recorded.calibration, miss.x_mm, miss.y_mm, miss.angle_rad, miss.why);
+        }
+        for (std::size_t m = misjudged_before; m < camera_tally.tally.misjudged_singles().size();
+             ++m) {
+          const vision::MisjudgedSingle& wrong = camera_tally.tally.misjudged_singles()[m];
+          write_marked_frame(frame_file(misjudged_directory, m - misjudged_before), image,
+                             *recorded.calibration, wrong.x_mm, wrong.y_mm, wrong.angle_rad,
+                             misjudged_text(wrong));
         }
         all.add_frame(result, truth->second);
       }
@@ -337,6 +359,21 @@ int vision_eval_command(const VisionEvalArgs& args) {
                      camera_tally.name, miss.sequence, miss.x_mm, miss.y_mm, miss.why);
       }
       per_camera[camera_tally.name]["missed_singles"] = std::move(missed);
+      nlohmann::json misjudged = nlohmann::json::array();
+      for (const vision::MisjudgedSingle& wrong : camera_tally.tally.misjudged_singles()) {
+        misjudged.push_back({{"sequence", wrong.sequence},
+                             {"x_mm", wrong.x_mm},
+                             {"y_mm", wrong.y_mm},
+                             {"angle_rad", wrong.angle_rad},
+                             {"true_hand", to_string(wrong.true_hand)},
+                             {"seen_hand", to_string(wrong.seen_hand)},
+                             {"true_side", to_string(wrong.true_side)},
+                             {"seen_side", to_string(wrong.seen_side)},
+                             {"confidence", wrong.confidence}});
+        spdlog::warn("{}: frame {}: single fillet at ({:.1f}, {:.1f}) mm: {}", camera_tally.name,
+                     wrong.sequence, wrong.x_mm, wrong.y_mm, misjudged_text(wrong));
+      }
+      per_camera[camera_tally.name]["misjudged_singles"] = std::move(misjudged);
       cameras.push_back(std::move(camera_tally));
     }
     if (!any_truth) {

@@ -119,6 +119,11 @@ void AccuracyTally::add_frame(const FrameResult& result, const std::vector<TrueF
     if (error_rad < std::numbers::pi / 2) ++counts_.thick_end_right;
     add_to(counts_.hand, fillet.hand, nearest->hand);
     add_to(counts_.side, fillet.side, nearest->side);
+    if (nearest->hand != fillet.hand || nearest->side != fillet.side) {
+      misjudged_.push_back({result.sequence, fillet.x_mm, fillet.y_mm, fillet.angle_rad,
+                            fillet.hand, nearest->hand, fillet.side, nearest->side,
+                            nearest->confidence});
+    }
     if (!nearest->singulated) ++counts_.singles_flagged;
   }
 

@@ -202,6 +202,33 @@ TEST(AccuracyTally, ASingleWithinTheLeastGapIsANearPair) {
   EXPECT_EQ(without_option.summary().singles_flagged, 1U);
 }
 
+// A detected single with the wrong hand or side, or one left unknown, is listed with its frame,
+// its true pose and what the estimator said, so that `vision eval` can show the frame; a right
+// one is not.
+TEST(AccuracyTally, AMisjudgedSingleIsListedWithWhatTheEstimatorSaid) {
+  AccuracyTally tally;
+  FrameResult frame;
+  frame.sequence = 239;
+  frame.blobs.push_back(fillet_blob(0.0F, 14.0F, 1.4F, Hand::kLeft, SideUp::kBone));  // both wrong
+  frame.blobs.push_back(fillet_blob(200.0F, 0.0F, 0.0F, Hand::kRight, SideUp::kSkin));  // right
+  frame.blobs.push_back(fillet_blob(-200.0F, 0.0F, 0.0F, Hand::kRight, SideUp::kUnknown));
+  tally.add_frame(frame, {single(0.0, 14.0, 1.4, Hand::kRight, SideUp::kSkin),
+                          single(200.0, 0.0, 0.0, Hand::kRight, SideUp::kSkin),
+                          single(-200.0, 0.0, 0.0, Hand::kRight, SideUp::kSkin)});
+  ASSERT_EQ(tally.misjudged_singles().size(), 2U);
+  const MisjudgedSingle& wrong = tally.misjudged_singles()[0];
+  EXPECT_EQ(wrong.sequence, 239U);
+  EXPECT_DOUBLE_EQ(wrong.y_mm, 14.0);
+  EXPECT_EQ(wrong.true_hand, Hand::kRight);
+  EXPECT_EQ(wrong.seen_hand, Hand::kLeft);
+  EXPECT_EQ(wrong.true_side, SideUp::kSkin);
+  EXPECT_EQ(wrong.seen_side, SideUp::kBone);
+  EXPECT_FLOAT_EQ(wrong.confidence, 0.9F);
+  EXPECT_EQ(tally.misjudged_singles()[1].seen_side, SideUp::kUnknown);
+  EXPECT_DOUBLE_EQ(tally.misjudged_singles()[1].x_mm, -200.0);
+  EXPECT_EQ(tally.summary().detected, 3U);
+}
+
 TEST(AccuracyTally, ARefusedFrameIsCounted) {
   AccuracyTally tally;
   FrameResult frame;

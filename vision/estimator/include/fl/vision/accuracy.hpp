@@ -96,6 +96,20 @@ struct MissedSingle {
   std::string why;
 };
 
+// A detected single fillet whose hand or side the estimator got wrong or left unknown (the
+// pose it was matched at, for drawing the frame).
+struct MisjudgedSingle {
+  std::uint32_t sequence = 0;
+  double x_mm = 0.0;  // the true pose
+  double y_mm = 0.0;
+  double angle_rad = 0.0;
+  Hand true_hand = Hand::kUnknown;
+  Hand seen_hand = Hand::kUnknown;
+  SideUp true_side = SideUp::kUnknown;
+  SideUp seen_side = SideUp::kUnknown;
+  float confidence = 0.0F;  // the estimate's
+};
+
 class AccuracyTally {
  public:
   explicit AccuracyTally(AccuracyOptions options = {}) : options_(options) {}
@@ -109,6 +123,7 @@ class AccuracyTally {
     return position_errors_mm_;
   }
   [[nodiscard]] const std::vector<MissedSingle>& missed_singles() const { return missed_; }
+  [[nodiscard]] const std::vector<MisjudgedSingle>& misjudged_singles() const { return misjudged_; }
 
  private:
   AccuracyOptions options_;
@@ -116,6 +131,7 @@ class AccuracyTally {
   std::vector<double> angle_errors_deg_;
   std::vector<double> position_errors_mm_;
   std::vector<MissedSingle> missed_;
+  std::vector<MisjudgedSingle> misjudged_;
 };
 
 // The smallest angle between two directions, in [0, pi].
