@@ -323,22 +323,21 @@ int vision_eval_command(const VisionEvalArgs& args) {
         const std::size_t missed_before = camera_tally.tally.missed_singles().size();
         const std::size_t misjudged_before = camera_tally.tally.misjudged_singles().size();
         camera_tally.tally.add_frame(result, truth->second);
-        const auto frame_file = [&](const std::filesystem::path& directory, std::size_t index) {
-          return directory / fmt::format("{}_{}_{}_{}.png", recording_stem(path), to_string(camera),
-                                         sequence, index);
+        // This frame's new entries of a list (missed or misjudged), each drawn into its file.
+        const auto write_new_frames = [&](const auto& entries, std::size_t before,
+                                          const std::filesystem::path& directory,
+                                          const auto& text_of) {
+          for (std::size_t m = before; m < entries.size(); ++m) {
+            write_marked_frame(directory / fmt::format("{}_{}_{}_{}.png", recording_stem(path),
+                                                       to_string(camera), sequence, m - before),
+                               image, *recorded.calibration, entries[m].x_mm, entries[m].y_mm,
+                               entries[m].angle_rad, text_of(entries[m]));
+          }
         };
-        for (std::size_t m = missed_before; m < camera_tally.tally.missed_singles().size(); ++m) {
-          const vision::MissedSingle& miss = camera_tally.tally.missed_singles()[m];
-          write_marked_frame(frame_file(missed_directory, m - missed_before), image,
-                             *recorded.calibration, miss.x_mm, miss.y_mm, miss.angle_rad, miss.why);
-        }
-        for (std::size_t m = misjudged_before; m < camera_tally.tally.misjudged_singles().size();
-             ++m) {
-          const vision::MisjudgedSingle& wrong = camera_tally.tally.misjudged_singles()[m];
-          write_marked_frame(frame_file(misjudged_directory, m - misjudged_before), image,
-                             *recorded.calibration, wrong.x_mm, wrong.y_mm, wrong.angle_rad,
-                             misjudged_text(wrong));
-        }
+        write_new_frames(camera_tally.tally.missed_singles(), missed_before, missed_directory,
+                         [](const vision::MissedSingle& miss) { return miss.why; });
+        write_new_frames(camera_tally.tally.misjudged_singles(), misjudged_before,
+                         misjudged_directory, misjudged_text);
         all.add_frame(result, truth->second);
       }
       if (frames_without_truth > 0) {

@@ -12,6 +12,9 @@ BendResult run_bend(const BendParams& params) {
   if (!(params.overhang_share > 0.0 && params.overhang_share < 1.0)) {
     throw std::invalid_argument("bend: overhang_share must be in (0, 1)");
   }
+  if (!(params.rest_damping_per_s >= 0.0)) {
+    throw std::invalid_argument("bend: rest_damping_per_s must be 0 or more");
+  }
   dem::ModelSpec spec = make_spec(params.common);
   const dem::FilletTemplate fillet = make_fillet(params.common);
   // Table top at z = 0, edge at x = 0, table towards -x.
@@ -82,9 +85,6 @@ BendResult run_bend(const BendParams& params) {
       s.angular_velocity_rad_per_s[k].setZero();
     }
   };
-  if (!(params.rest_damping_per_s >= 0.0)) {
-    throw std::invalid_argument("bend: rest_damping_per_s must be 0 or more");
-  }
   // Exact decay of dv/dt = -c v over one step, so no step size can overshoot.
   const double rest_decay_per_step = std::exp(-params.rest_damping_per_s * spec.timestep_s);
   auto damp = [&] {
