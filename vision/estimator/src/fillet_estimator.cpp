@@ -119,6 +119,24 @@ FilletEstimator::FilletEstimator(BeltCalibration calibration, EstimatorParams pa
       std::max(1, static_cast<int>(std::lround(0.5 * params_.min_gap_mm / work_mm_per_px)));
   gap_dilation_ = cv::getStructuringElement(
       cv::MORPH_ELLIPSE, cv::Size(2 * gap_radius_px_ + 1, 2 * gap_radius_px_ + 1));
+  const double fine_mm = params_.texture_fine_sigma_mm;
+  const double coarse_mm = params_.texture_coarse_sigma_mm;
+  if (!(fine_mm > 0.0) || !(coarse_mm > fine_mm) || !std::isfinite(coarse_mm)) {
+    throw std::invalid_argument(
+        "FilletEstimator: the texture band needs 0 < texture_fine_sigma_mm (" +
+        std::to_string(fine_mm) + ") < texture_coarse_sigma_mm (" + std::to_string(coarse_mm) +
+        ")");
+  }
+  if (!(params_.texture_mm_per_px > 0.0) || !std::isfinite(params_.texture_mm_per_px)) {
+    throw std::invalid_argument("FilletEstimator: texture_mm_per_px (" +
+                                std::to_string(params_.texture_mm_per_px) +
+                                ") must be a positive pixel size");
+  }
+  texture_downscale_ =
+      std::max(1, static_cast<int>(std::lround(params_.texture_mm_per_px / work_mm_per_px)));
+  const double texture_px_mm = work_mm_per_px * texture_downscale_;
+  texture_fine_sigma_px_ = fine_mm / texture_px_mm;
+  texture_coarse_sigma_px_ = coarse_mm / texture_px_mm;
 }
 
 FrameResult FilletEstimator::estimate(const cv::Mat& bgr, std::int64_t frame_time_ns,
@@ -405,28 +423,53 @@ BlobResult FilletEstimator::measure_blob(const std::vector<cv::Point>& contour) 
   cv::drawContours(interior_, std::vector<std::vector<cv::Point>>{contour}, 0, cv::Scalar(255),
                    cv::FILLED, cv::LINE_8, cv::noArray(), 0, -box.tl());
   cv::erode(interior_, eroded_, interior_erosion_);
-  // Band-pass: detail between ~0.5 and ~1.5 mm; the fine blur suppresses per-pixel noise.
-  grey_(box).convertTo(grey_box_, CV_32F);
-  cv::GaussianBlur(grey_box_, fine_, cv::Size(0, 0), 0.7);
-  cv::GaussianBlur(grey_box_, coarse_, cv::Size(0, 0), 2.5);
-  // Colour, brightness and detail means over the interior in one pass instead of three masked
-  // cv::mean calls and an absdiff; integer sums as cv::mean keeps them, and the mean is the sum
-  // times 1 / count as there, so only the order of the detail sum can differ.
+  // Colour and brightness means over the interior in one pass instead of masked cv::mean
+  // calls: integer sums as cv::mean keeps them, and the mean is the sum times 1 / count as
+  // there.
   std::int64_t sum_green = 0, sum_red = 0, sum_grey = 0, count = 0;
-  double sum_detail = 0.0;
   for (int row = 0; row < box.height; ++row) {
     const auto* inside = eroded_.ptr<std::uint8_t>(row);
     const auto* bgr = work_bgr_.ptr<std::uint8_t>(box.y + row) + 3 * box.x;
     const auto* grey = grey_.ptr<std::uint8_t>(box.y + row) + box.x;
-    const auto* fine = fine_.ptr<float>(row);
-    const auto* coarse = coarse_.ptr<float>(row);
     for (int col = 0; col < box.width; ++col) {
       if (inside[col] == 0) continue;
       sum_green += bgr[3 * col + 1];
       sum_red += bgr[3 * col + 2];
       sum_grey += grey[col];
-      sum_detail += static_cast<double>(std::abs(fine[col] - coarse[col]));
       ++count;
+    }
+  }
+  // Texture: a band-pass in belt millimetres (EstimatorParams) on the box area-averaged to the
+  // texture scale, so that every camera measures it on pixels of about the same size (and the
+  // blurs run on a quarter of the pixels at 640 x 480). Only texture pixels wholly inside the
+  // eroded interior count. The fine blur suppresses per-pixel noise.
+  grey_(box).convertTo(grey_box_, CV_32F);
+  const cv::Mat* texture_grey = &grey_box_;
+  const cv::Mat* texture_inside = &eroded_;
+  if (texture_downscale_ > 1) {
+    // Whole blocks only (the box's last row or column may be dropped), so each texture pixel
+    // is the mean of exactly t x t working pixels.
+    const int t = texture_downscale_;
+    const cv::Size reduced(std::max(1, box.width / t), std::max(1, box.height / t));
+    const cv::Rect blocks(0, 0, std::min(box.width, reduced.width * t),
+                          std::min(box.height, reduced.height * t));
+    cv::resize(grey_box_(blocks), texture_grey_, reduced, 0, 0, cv::INTER_AREA);
+    cv::resize(eroded_(blocks), texture_inside_, reduced, 0, 0, cv::INTER_AREA);
+    texture_grey = &texture_grey_;
+    texture_inside = &texture_inside_;
+  }
+  cv::GaussianBlur(*texture_grey, fine_, cv::Size(0, 0), texture_fine_sigma_px_);
+  cv::GaussianBlur(*texture_grey, coarse_, cv::Size(0, 0), texture_coarse_sigma_px_);
+  double sum_detail = 0.0;
+  std::int64_t texture_count = 0;
+  for (int row = 0; row < texture_grey->rows; ++row) {
+    const auto* inside = texture_inside->ptr<std::uint8_t>(row);
+    const auto* fine = fine_.ptr<float>(row);
+    const auto* coarse = coarse_.ptr<float>(row);
+    for (int col = 0; col < texture_grey->cols; ++col) {
+      if (inside[col] != 255) continue;
+      sum_detail += static_cast<double>(std::abs(fine[col] - coarse[col]));
+      ++texture_count;
     }
   }
   const double per_pixel = count > 0 ? 1.0 / static_cast<double>(count) : 0.0;
@@ -434,7 +477,9 @@ BlobResult FilletEstimator::measure_blob(const std::vector<cv::Point>& contour) 
   const double mean_red = static_cast<double>(sum_red) * per_pixel;
   f.redness = mean_red > 1.0 ? (mean_red - mean_green) / mean_red : 0.0;
   const double mean_grey = static_cast<double>(sum_grey) * per_pixel;
-  f.texture = mean_grey > 1.0 ? sum_detail * per_pixel / mean_grey : 0.0;
+  f.texture = mean_grey > 1.0 && texture_count > 0
+                  ? sum_detail / static_cast<double>(texture_count) / mean_grey
+                  : 0.0;
   f.side_score = params_.w_redness * (f.redness - params_.redness_mid) / params_.redness_scale +
                  params_.w_texture * (f.texture - params_.texture_mid) / params_.texture_scale;
   const bool bone_up = f.side_score > 0.0;

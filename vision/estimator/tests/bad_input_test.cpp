@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "render_support.hpp"
 
@@ -113,6 +114,25 @@ TEST(BadInput, DebrisIsIgnored) {
 TEST(BadInput, CalibrationWithoutImageSizeIsRejected) {
   BeltCalibration calibration;
   EXPECT_THROW(FilletEstimator{calibration}, std::invalid_argument);
+}
+
+// A texture band that is empty or inverted, or a texture pixel size of zero (say from
+// `linectl replay --set`), would measure no texture and call every fillet skin side up:
+// refused when the estimator is built.
+TEST(BadInput, EmptyOrInvertedTextureBandIsRejected) {
+  const BeltCalibration calibration = exact_calibration(camera_640());
+  EstimatorParams params;
+  params.texture_fine_sigma_mm = 0.0;
+  EXPECT_THROW((FilletEstimator{calibration, params}), std::invalid_argument);
+  params.texture_fine_sigma_mm = params.texture_coarse_sigma_mm;
+  EXPECT_THROW((FilletEstimator{calibration, params}), std::invalid_argument);
+  params.texture_fine_sigma_mm = 0.7;
+  params.texture_coarse_sigma_mm = std::numeric_limits<double>::infinity();
+  EXPECT_THROW((FilletEstimator{calibration, params}), std::invalid_argument);
+  params.texture_coarse_sigma_mm = 2.3;
+  EXPECT_NO_THROW((FilletEstimator{calibration, params}));
+  params.texture_mm_per_px = 0.0;  // no pixel size to reduce the blob to
+  EXPECT_THROW((FilletEstimator{calibration, params}), std::invalid_argument);
 }
 
 }  // namespace

@@ -78,15 +78,26 @@ struct EstimatorParams {
   double pose_offset_toward_bulge_mm = 0.74;
   double sure_thick_end_skewness = 0.10;  // |skewness| at which the thick end counts as sure
   double sure_bulge_skewness = 0.08;
+  // Texture band-pass, in belt millimetres so that every camera resolution measures the same
+  // detail: the difference of two Gaussian blurs of these sigmas. The band keys on the fibre
+  // and fat streaks (~1 mm wide, ~12 mm long). It is measured on the blob area-averaged by an
+  // integer factor to about `texture_mm_per_px` (640 x 480 and 1280 x 1024 by 2, 320 x 240 as
+  // it is), so every camera sees it on pixels of the same size. The band once set in pixels
+  // (0.7 and 2.5 px, ~0.33 to 1.17 mm at 640 x 480) read pixel noise and aliasing as texture
+  // at 320 x 240: skin reached 0.016 there, against 0.009 at 640 x 480.
+  double texture_mm_per_px = 0.9;
+  double texture_fine_sigma_mm = 0.7;
+  double texture_coarse_sigma_mm = 2.3;
   // Side classifier: score = w_redness * (redness - redness_mid) / redness_scale +
   //                          w_texture * (texture - texture_mid) / texture_scale; > 0 = bone.
-  // Fitted on 100 rendered training frames (seeds 100000..100099): skin redness 0.12..0.27,
-  // bone 0.22..0.40; skin texture 0.004..0.008, bone 0.019..0.032. Texture separates, redness
-  // only supports it.
+  // Fitted on 200 rendered training frames (seeds 100000..100199) at 320 x 240, 640 x 480
+  // and 1280 x 1024: skin redness 0.09..0.27, bone 0.22..0.41; skin texture 0.0071..0.0121,
+  // bone 0.022..0.039 at every resolution. Texture separates, redness only supports it; the
+  // midpoint is the geometric middle of the gap.
   double redness_mid = 0.255;
   double redness_scale = 0.05;
-  double texture_mid = 0.0125;
-  double texture_scale = 0.003;
+  double texture_mid = 0.0165;
+  double texture_scale = 0.0035;
   double w_redness = 0.5;
   double w_texture = 1.0;
   double sure_side_score = 1.0;
@@ -170,6 +181,10 @@ class FilletEstimator {
   cv::Mat interior_erosion_;  // ~3 mm ellipse
   cv::Mat gap_dilation_;      // min_gap_mm / 2 ellipse
   int gap_radius_px_ = 1;
+  // The texture band: integer reduction from the working scale, and its sigmas there.
+  int texture_downscale_ = 1;
+  double texture_fine_sigma_px_ = 0.75;
+  double texture_coarse_sigma_px_ = 2.45;
   // Reused buffers.
   cv::Mat work_bgr_;
   cv::Mat chroma_;
@@ -180,6 +195,8 @@ class FilletEstimator {
   cv::Mat interior_;
   cv::Mat eroded_;
   cv::Mat grey_box_;
+  cv::Mat texture_grey_;
+  cv::Mat texture_inside_;
   cv::Mat fine_;
   cv::Mat coarse_;
 };
