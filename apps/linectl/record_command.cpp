@@ -61,8 +61,9 @@ class PlantScene final : public rec::TwinScene {
         fillet.angle_rad = view.angle_rad;
         fillet.hand = view.hand;
         fillet.side = view.side;
-        // The DEM view does not say which table 3.1 size a fillet has: the middle one.
-        fillet.size_variant = 1;
+        // The template's table 3.1 size, drawn at its nominal length: the DEM fillet is that
+        // mesh, not a scaled one. Its bending is not drawn (the sprite is rigid).
+        fillet.size_variant = view.size_variant;
         fillet.group_id = view.touching ? static_cast<int>(view.group_id) : -1;
         out.push_back(fillet);
       }

@@ -548,6 +548,8 @@ std::vector<DemFilletView> DemPlant::fillets() const {
     v.plant_id = fillet.plant_id;
     v.group_id = fillet.group_id;
     v.hand = hand_of(fillet);
+    // thesis_fillet_variants() lists each table 3.1 size left, then right.
+    v.size_variant = static_cast<std::uint8_t>(fillet.variant / 2);
     v.side = pose.side;
     v.s_mm = fillet.centroid_m.x() / kMm;
     v.y_mm = fillet.centroid_m.y() / kMm;

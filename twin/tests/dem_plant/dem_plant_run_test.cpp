@@ -1,6 +1,7 @@
 // Exits and the balance, determinism, and the closed loop through apps' run_closed_loop.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 
 #include "dem_plant_test_support.hpp"
@@ -37,6 +38,31 @@ TEST(DemPlantRun, FedEqualsExitsPlusOnLine) {
   EXPECT_EQ(rig.plant->fillets_fed(),
             exits[0] + exits[1] + exits[2] + exits[3] + rig.plant->fillets_on_line());
   EXPECT_EQ(rig.plant->fillets().size(), 1U);  // the engine really lost the two
+}
+
+// The camera renderer draws each DEM fillet at its view's size_variant: the view must name
+// the table 3.1 row of the template the fillet was made from, for all six templates.
+TEST(DemPlantRun, ViewsCarryTheTableSizeOfTheirTemplate) {
+  DemRig rig;
+  const auto& templates = rig.plant->templates();
+  ASSERT_EQ(templates.size(), 6U);  // three sizes, each left and right
+  // The renderer's rows, in its order (fillet_renderer.hpp, FilletInstance::size_variant).
+  const char* const kRowPrefix[] = {"s144x72x40", "s172x72x32", "s176x72x40"};
+  for (std::uint8_t variant = 0; variant < 6; ++variant) {
+    DemFilletSpawn spawn;
+    spawn.variant = variant;
+    spawn.s_mm = 1900.0 + 250.0 * variant;  // one per 250 mm on the stopped line: no contact
+    ASSERT_TRUE(rig.plant->spawn_fillet(spawn)) << int{variant};
+  }
+  const auto views = rig.plant->fillets();
+  ASSERT_EQ(views.size(), 6U);
+  for (const DemFilletView& view : views) {
+    const int variant = static_cast<int>(std::lround((view.s_mm - 1900.0) / 250.0));
+    ASSERT_TRUE(variant >= 0 && variant < 6) << view.s_mm;
+    const auto& name = templates[static_cast<std::size_t>(variant)].name;
+    EXPECT_TRUE(name.starts_with(kRowPrefix[view.size_variant])) << name;
+    EXPECT_EQ(view.hand, name.ends_with("_left") ? Hand::kLeft : Hand::kRight) << name;
+  }
 }
 
 TEST(DemPlantRun, SameSeedAndThreadsGiveIdenticalImages) {

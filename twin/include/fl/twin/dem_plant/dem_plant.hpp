@@ -83,6 +83,9 @@ struct DemFilletView {
   std::uint32_t group_id = 0;
   Hand hand = Hand::kUnknown;
   SideUp side = SideUp::kUnknown;
+  // Table 3.1 row of its template, counted as the renderer's size_variant: 0 = 144x72x40,
+  // 1 = 172x72x32, 2 = 176x72x40 mm.
+  std::uint8_t size_variant = 1;
   double s_mm = 0.0;
   double y_mm = 0.0;
   double z_mm = 0.0;  // centroid height over the reject belt's plane (engine z)
