@@ -197,6 +197,11 @@ CLI::App* add_calibrate_subcommand(CLI::App& app, CalibrateArgs& args) {
       ->add_option("--local-evaluations", args.local_evaluations,
                    "twin evaluations of the local fit after the design (0: none)")
       ->check(CLI::Range(0, 10000));
+  command
+      ->add_option("--profile", args.profile_evaluations,
+                   "trace each parameter's profile, the others re-fitted with at most this many "
+                   "twin evaluations per step of a tenth of the box (0: no profile)")
+      ->check(CLI::Range(0, 1000));
   return command;
 }
 
@@ -218,6 +223,7 @@ int calibrate_command(const CalibrateArgs& args) {
   options.hammersley_points = args.points;
   options.factorial_levels = args.levels;
   options.max_local_evaluations = args.local_evaluations;
+  options.profile_fit_evaluations = args.profile_evaluations;
   Calibration result;
   try {
     result = calibrate(inputs->dataset, inputs->common, parameters, options);
@@ -265,15 +271,26 @@ int calibrate_command(const CalibrateArgs& args) {
         std::isfinite(s.joint_interval_low) && std::isfinite(s.joint_interval_high)
             ? fmt::format("joint {:.4g} .. {:.4g}", s.joint_interval_low, s.joint_interval_high)
             : std::string("no joint interval");
+    const auto bound_text = [](double bound, bool open) {
+      return open ? fmt::format("open at the box's {:.4g}", bound) : fmt::format("{:.4g}", bound);
+    };
+    const std::string profile =
+        args.profile_evaluations == 0 ? std::string()
+        : std::isfinite(s.profile_interval_low) && std::isfinite(s.profile_interval_high)
+            ? fmt::format("; profile {} .. {}",
+                          bound_text(s.profile_interval_low, s.profile_low_open),
+                          bound_text(s.profile_interval_high, s.profile_high_open))
+            : std::string("; no profile interval");
     sensitivity += fmt::format(
-        "  {}: at {:.4g} down to {:.4g}: {}, up to {:.4g}: {} -> {}; {}; {}\n",
+        "  {}: at {:.4g} down to {:.4g}: {}, up to {:.4g}: {} -> {}; {}; {}{}\n",
         parameters[p].address, result.best[p], s.value_down, rms_text(s.rmse_down), s.value_up,
         rms_text(s.rmse_up), s.determined ? "determined" : "NOT determined by this dataset",
-        interval, joint);
+        interval, joint, profile);
   }
   spdlog::info(
       "sensitivity, RMS (SI) with each parameter alone moved a tenth of its box, its 95 % "
-      "interval with the others held (conditional) and with them re-fitted (joint):\n{}",
+      "interval with the others held (conditional), with them re-fitted about the calibrated "
+      "point (joint) and along the way (profile, --profile):\n{}",
       sensitivity);
   if (parameters.size() > 1 && result.correlation.empty()) {
     spdlog::warn(

@@ -52,6 +52,7 @@ struct CalibrateArgs {
   int points = 16;
   int levels = 3;
   int local_evaluations = 60;
+  int profile_evaluations = 0;  // per re-fit along each parameter's profile; 0: no profile
 };
 
 CLI::App* add_compare_subcommand(CLI::App& app, CompareArgs& args);

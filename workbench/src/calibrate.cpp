@@ -203,6 +203,17 @@ constexpr double kSensitivityStep = 0.1;
 // chi-square with one degree of freedom at 95 %: the likelihood-ratio test's threshold.
 constexpr double kChiSquare95OneParameter = 3.841;
 
+// The likelihood-ratio test's rise of the residual sum of squares at 95 %: 3.84 sigma^2, sigma
+// the dataset's noise or, where it gives none, the calibrated residual's own with the
+// parameters' degrees of freedom taken off.
+double likelihood_threshold(const Calibration& result, std::size_t dimensions) {
+  const auto n = static_cast<double>(result.samples);
+  const double free_samples = std::max(1.0, n - static_cast<double>(dimensions));
+  const double variance = result.noise_si > 0.0 ? result.noise_si * result.noise_si
+                                                : result.rmse * result.rmse * n / free_samples;
+  return kChiSquare95OneParameter * variance;
+}
+
 std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
                                                 const std::vector<CalibratedParameter>& parameters,
                                                 const std::vector<double>& best_unit,
@@ -248,10 +259,7 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
       [](std::size_t, std::size_t) {});
 
   const auto n = static_cast<double>(result.samples);
-  const double free_samples = std::max(1.0, n - static_cast<double>(dimensions));
-  const double variance = result.noise_si > 0.0 ? result.noise_si * result.noise_si
-                                                : result.rmse * result.rmse * n / free_samples;
-  const double threshold = kChiSquare95OneParameter * variance;
+  const double threshold = likelihood_threshold(result, dimensions);
   const auto rss = [&](double rmse) { return n * rmse * rmse; };
   std::vector<ParameterSensitivity> out(dimensions);
   for (std::size_t p = 0; p < dimensions; ++p) {
@@ -319,6 +327,129 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
   }
   correlation = joint.correlation;
   return out;
+}
+
+// One side of parameter p's profile (ParameterSensitivity): steps of kSensitivityStep
+// towards the box's edge, the other coordinates re-fitted at each, continued from the step
+// before (they follow the valley), until the rise over rss_best passes the threshold. A step
+// that overshoots it by far (or that the twin refused) is halved and tried again, down to
+// kMinProfileStep, so a well-determined parameter is traced where it bends, not across.
+// The bound is interpolated linearly in sqrt(rise) between the last two steps: exact for a
+// parabola about the calibrated point, which a linear rise is not.
+constexpr double kMinProfileStep = kSensitivityStep / 64.0;
+constexpr double kOvershootRise = 16.0;  // in thresholds: the bound in the step's first quarter
+
+struct ProfileSide {
+  std::vector<std::pair<double, double>> points;  // (u, re-fitted RMS; NaN: refused), any order
+  double bound_u = std::numeric_limits<double>::quiet_NaN();
+  bool open = false;  // the edge reached with the rise under the threshold
+  int evaluations = 0;
+};
+
+ProfileSide trace_profile_side(const Evaluator& evaluator, std::size_t p, double direction,
+                               const std::vector<double>& best_unit, double rmse_best,
+                               double samples, double threshold, int fit_evaluations) {
+  ProfileSide side;
+  std::vector<double> others_before;
+  for (std::size_t q = 0; q < best_unit.size(); ++q) {
+    if (q != p) others_before.push_back(best_unit[q]);
+  }
+  const double edge = direction > 0.0 ? 1.0 : 0.0;
+  const double rss_best = samples * rmse_best * rmse_best;
+  double u_before = best_unit[p];
+  double root_rise_before = 0.0;
+  double step = kSensitivityStep;
+  // Ten steps cross the box; each of the six halvings adds a few.
+  for (int attempt = 0; attempt < 64; ++attempt) {
+    if (std::abs(u_before - edge) < 1e-9) {
+      side.bound_u = edge;
+      side.open = true;
+      break;
+    }
+    double u = u_before + direction * step;
+    if (direction * (u - edge) > -1e-9) u = edge;  // the last step lands on the edge
+    std::vector<double> others = others_before;
+    const detail::UnitBoxObjective at_step = [&](const std::vector<double>& rest) {
+      ++side.evaluations;
+      std::vector<double> point;
+      for (std::size_t q = 0, r = 0; q < best_unit.size(); ++q) {
+        point.push_back(q == p ? u : rest[r++]);
+      }
+      return evaluator.rmse(point);
+    };
+    double rmse = detail::guarded_value(at_step, others, "calibrate: profile");
+    if (!others.empty()) {
+      rmse = detail::minimise_in_unit_box(at_step, others, rmse, 0.5 * kSensitivityStep,
+                                          fit_evaluations, "calibrate: profile");
+    }
+    const bool refused = !(rmse < 1e300);
+    side.points.emplace_back(u, refused ? std::numeric_limits<double>::quiet_NaN() : rmse);
+    const double rise = refused ? 0.0 : samples * rmse * rmse - rss_best;
+    const bool closer = step > kMinProfileStep * 1.5;
+    if (refused || rise > threshold) {
+      if (closer && (refused || rise > kOvershootRise * threshold)) {
+        step *= 0.5;
+        continue;
+      }
+      if (refused) {  // the model does not run past here: the region ends where it last ran
+        side.bound_u = u_before;
+        break;
+      }
+      const double root_rise = std::sqrt(rise);
+      side.bound_u = u_before + (u - u_before) * (std::sqrt(threshold) - root_rise_before) /
+                                    (root_rise - root_rise_before);
+      break;
+    }
+    u_before = u;
+    root_rise_before = std::sqrt(std::max(0.0, rise));
+    others_before = others;
+  }
+  return side;
+}
+
+// Every parameter's profile, both sides at once on the cores; fills the profile fields.
+int trace_profiles(const Evaluator& evaluator, const std::vector<CalibratedParameter>& parameters,
+                   const std::vector<double>& best_unit, const Calibration& result,
+                   int fit_evaluations, int threads, std::vector<ParameterSensitivity>& out) {
+  const std::size_t dimensions = parameters.size();
+  const double threshold = likelihood_threshold(result, dimensions);
+  const auto samples = static_cast<double>(result.samples);
+  std::vector<ProfileSide> sides(2 * dimensions);
+  model_tests::parallel_for(
+      sides.size(), std::max(1, threads),
+      [&](std::size_t k) {
+        sides[k] = trace_profile_side(evaluator, k / 2, k % 2 == 0 ? -1.0 : 1.0, best_unit,
+                                      result.rmse, samples, threshold, fit_evaluations);
+      },
+      [&](std::size_t done, std::size_t total) {
+        spdlog::info("calibrate: profile {} of {} traced", done, total);
+      });
+  int evaluations = 0;
+  for (std::size_t p = 0; p < dimensions; ++p) {
+    const ProfileSide& down = sides[2 * p];
+    const ProfileSide& up = sides[2 * p + 1];
+    ParameterSensitivity& s = out[p];
+    const auto value = [&](double u) {
+      return std::isnan(u) ? u : from_unit(parameters[p], std::clamp(u, 0.0, 1.0));
+    };
+    s.profile_interval_low = value(down.bound_u);
+    s.profile_interval_high = value(up.bound_u);
+    s.profile_low_open = down.open;
+    s.profile_high_open = up.open;
+    std::vector<std::pair<double, double>> points = down.points;
+    points.insert(points.end(), up.points.begin(), up.points.end());
+    points.emplace_back(best_unit[p], result.rmse);
+    std::sort(points.begin(), points.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    s.profile_values.clear();
+    s.profile_rmse.clear();
+    for (const auto& [u, rmse] : points) {
+      s.profile_values.push_back(value(u));
+      s.profile_rmse.push_back(rmse);
+    }
+    evaluations += down.evaluations + up.evaluations;
+  }
+  return evaluations;
 }
 
 }  // namespace
@@ -420,6 +551,9 @@ Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& b
                       const std::vector<CalibratedParameter>& parameters,
                       const CalibrationOptions& options) {
   if (parameters.empty()) throw std::invalid_argument("calibrate: no parameter to calibrate");
+  if (options.profile_fit_evaluations < 0) {
+    throw std::invalid_argument("calibrate: profile_fit_evaluations must not be negative");
+  }
   Calibration result;
   result.channel = std::string(detail::judged_channel(dataset.experiment));
   result.parameters = parameters;
@@ -508,6 +642,15 @@ Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& b
                                      factorial, options.threads, result.correlation);
   result.evaluations +=
       static_cast<int>(2 * parameters.size() + parameters.size() * (parameters.size() - 1) / 2);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (ParameterSensitivity& s : result.sensitivity) {
+    s.profile_interval_low = s.profile_interval_high = nan;
+  }
+  if (options.profile_fit_evaluations > 0) {
+    result.evaluations +=
+        trace_profiles(evaluator, parameters, x, result, options.profile_fit_evaluations,
+                       options.threads, result.sensitivity);
+  }
   spdlog::info("calibrate: RMS {:.4g} -> {:.4g} (SI) in {} twin evaluations", result.base_rmse,
                result.rmse, result.evaluations);
   return result;
@@ -537,6 +680,8 @@ std::string calibration_json(const Calibration& calibration) {
       };
       nlohmann::json main_effect = nlohmann::json::array();
       for (const double rmse : s.main_effect_rmse) main_effect.push_back(number(rmse));
+      nlohmann::json profile_rmse = nlohmann::json::array();
+      for (const double rmse : s.profile_rmse) profile_rmse.push_back(number(rmse));
       out["parameters"].back()["sensitivity"] = {
           {"value_down", s.value_down},
           {"rmse_down_si", number(s.rmse_down)},
@@ -545,7 +690,12 @@ std::string calibration_json(const Calibration& calibration) {
           {"determined", s.determined},
           {"main_effect_rmse_si", main_effect},
           {"interval_95", {number(s.interval_low), number(s.interval_high)}},
-          {"joint_interval_95", {number(s.joint_interval_low), number(s.joint_interval_high)}}};
+          {"joint_interval_95", {number(s.joint_interval_low), number(s.joint_interval_high)}},
+          {"profile_interval_95",
+           {number(s.profile_interval_low), number(s.profile_interval_high)}},
+          {"profile_open", {s.profile_low_open, s.profile_high_open}},
+          {"profile_values", s.profile_values},
+          {"profile_rmse_si", profile_rmse}};
     }
   }
   // empty (null) when the parameters are not determined together
@@ -607,6 +757,15 @@ std::vector<std::filesystem::path> write_sensitivity_plots(const Calibration& ca
       local.y.push_back(rmse);
     }
     plot.series.push_back(std::move(local));
+    report::Series profile;
+    profile.label = "profile (others re-fitted)";
+    profile.style = report::SeriesStyle::kLineAndMarkers;
+    for (std::size_t k = 0; k < s.profile_values.size(); ++k) {
+      if (!std::isfinite(s.profile_rmse[k])) continue;
+      profile.x.push_back(s.profile_values[k]);
+      profile.y.push_back(s.profile_rmse[k]);
+    }
+    if (!profile.x.empty()) plot.series.push_back(std::move(profile));
     plot.references.push_back(
         {.vertical = true, .value = calibration.best[p], .label = "calibrated"});
     for (const double bound : {s.interval_low, s.interval_high}) {
@@ -617,6 +776,12 @@ std::vector<std::filesystem::path> write_sensitivity_plots(const Calibration& ca
     for (const double bound : {s.joint_interval_low, s.joint_interval_high}) {
       if (std::isfinite(bound)) {
         plot.references.push_back({.vertical = true, .value = bound, .label = "95 % joint"});
+      }
+    }
+    for (const auto& [bound, open] : {std::pair{s.profile_interval_low, s.profile_low_open},
+                                      std::pair{s.profile_interval_high, s.profile_high_open}}) {
+      if (std::isfinite(bound) && !open) {
+        plot.references.push_back({.vertical = true, .value = bound, .label = "95 % profile"});
       }
     }
     if (calibration.noise_si > 0.0) {

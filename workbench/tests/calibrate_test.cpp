@@ -13,11 +13,16 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
+#include "calibrate_test_support.hpp"
 #include "fl/twin/dem/config.hpp"
 #include "workbench_test_support.hpp"
 
 namespace fl::workbench {
 namespace {
+
+using test::calibrate_stiffness_and;
+using test::kTruthStiffness;
+using test::stiffer_bonds_compression;
 
 TEST(Calibrate, ParsesParameterBoxes) {
   const CalibratedParameter stiffness =
@@ -109,32 +114,6 @@ TEST(Calibrate, AddressesSetEveryLawTheyNameAndNothingElse) {
       EXPECT_NE(std::string(error.what()).find(address), std::string::npos) << error.what();
     }
   }
-}
-
-// A compression dataset measured with bonds 1.8 times appendix B's normal stiffness and no
-// effect, at the tests' force noise: what a calibration must find.
-constexpr double kTruthStiffness = 1.8e6;
-Dataset stiffer_bonds_compression() {
-  GeneratorOptions options;
-  options.effect = "none";
-  options.force_noise_n = test::kNoiseN;
-  options.common = test::base_model();
-  options.common.base_spec =
-      with_calibrated(options.common.base_spec,
-                      {{"bond.normal_stiffness_n_per_m3", 1.0, 2.0, false}}, {kTruthStiffness});
-  return generate_dataset(options).dataset;
-}
-
-// The normal stiffness (3e5 to 1e7, log) calibrated together with `other`: 8 Hammersley points
-// and at most 20 local evaluations, as a quick two-parameter fit.
-Calibration calibrate_stiffness_and(const Dataset& data, const std::string& other) {
-  CalibrationOptions calibration;
-  calibration.hammersley_points = 8;
-  calibration.max_local_evaluations = 20;
-  return calibrate(data, test::base_model(),
-                   {parse_calibrated_parameter("bond.normal_stiffness_n_per_m3=3e5:1e7:log"),
-                    parse_calibrated_parameter(other)},
-                   calibration);
 }
 
 // The curvature matrix from the moves of an exact quadratic bowl rss(u) = 100 + d^T A d,
@@ -297,6 +276,9 @@ TEST(Calibrate, JointIntervalShowsTheTradeOffTheConditionalOneHides) {
   const nlohmann::json json = nlohmann::json::parse(calibration_json(result));
   EXPECT_EQ(json["correlation"].is_null(), result.correlation.empty());
   EXPECT_EQ(json["parameters"][0]["sensitivity"]["joint_interval_95"].size(), 2U);
+  // No profile was asked for: its interval is null, not made up.
+  EXPECT_TRUE(json["parameters"][0]["sensitivity"]["profile_interval_95"][0].is_null());
+  EXPECT_TRUE(json["parameters"][0]["sensitivity"]["profile_values"].empty());
 }
 
 TEST(Calibrate, SensitivitySaysWhichParametersTheDataDetermine) {

@@ -44,6 +44,10 @@ struct CalibrationOptions {
   int factorial_levels = 3;        // per parameter: levels^parameters points
   int max_local_evaluations = 60;  // the local fit after the design; 0: design only
   int threads = 2;                 // design points run at once
+  // Trace each parameter's profile (see ParameterSensitivity): steps of a tenth of the box
+  // from the calibrated point, the others re-fitted at each with at most this many twin
+  // evaluations. 0: not traced (the local and joint intervals only).
+  int profile_fit_evaluations = 0;
 };
 
 // Points of a design in the unit cube [0, 1]^dimensions: a full factorial grid with `levels`
@@ -89,6 +93,23 @@ struct ParameterSensitivity {
   // data do not pin the parameters down together, whatever each alone says.
   double joint_interval_low = 0.0;
   double joint_interval_high = 0.0;
+  // The profile 95 % interval (CalibrationOptions::profile_fit_evaluations > 0, else NaN): the
+  // parameter stepped away from the calibrated point a tenth of its box at a time, the other
+  // parameters re-fitted at each step (continued from the step before), until the residual
+  // sum of squares rises 3.84 sigma^2 over the calibrated one; the bound is interpolated
+  // between the last two steps, linearly in sqrt(rise) (exact for a parabola). A step that
+  // overshoots by far, or that the twin refuses, is halved and tried again (down to 1/64). Unlike
+  // the joint interval it follows a curved valley and exists where the curvature matrix is
+  // singular. A bound the rise never reached inside the box is the box's edge, flagged open: the
+  // data do not bound the parameter that way.
+  double profile_interval_low = 0.0;
+  double profile_interval_high = 0.0;
+  bool profile_low_open = false;
+  bool profile_high_open = false;
+  // The traced profile, by value: each step's value and the re-fitted RMS there (the
+  // calibrated point included).
+  std::vector<double> profile_values;
+  std::vector<double> profile_rmse;
   // Design points by slice of the box (factorial: one per level; Hammersley: quarters), the
   // mean RMS of those the twin ran; NaN for a slice without any. The values: each slice's
   // level or middle, in the parameter's unit.
