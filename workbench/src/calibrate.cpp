@@ -714,6 +714,24 @@ std::string calibration_json(const Calibration& calibration) {
   return out.dump(1);
 }
 
+namespace {
+
+// A line through the points whose RMS is finite (a slice without runs, a refused point: none).
+void add_finite_line(report::Plot& plot, std::string label, const std::vector<double>& values,
+                     const std::vector<double>& rmse) {
+  report::Series line;
+  line.label = std::move(label);
+  line.style = report::SeriesStyle::kLineAndMarkers;
+  for (std::size_t k = 0; k < values.size() && k < rmse.size(); ++k) {
+    if (!std::isfinite(rmse[k])) continue;
+    line.x.push_back(values[k]);
+    line.y.push_back(rmse[k]);
+  }
+  if (!line.x.empty()) plot.series.push_back(std::move(line));
+}
+
+}  // namespace
+
 std::vector<std::filesystem::path> write_sensitivity_plots(const Calibration& calibration,
                                                            const std::filesystem::path& folder) {
   std::vector<std::filesystem::path> written;
@@ -736,15 +754,7 @@ std::vector<std::filesystem::path> write_sensitivity_plots(const Calibration& ca
       design.y.push_back(run.rmse);
     }
     if (!design.x.empty()) plot.series.push_back(std::move(design));
-    report::Series main_effect;
-    main_effect.label = "main effect";
-    main_effect.style = report::SeriesStyle::kLineAndMarkers;
-    for (std::size_t slice = 0; slice < s.main_effect_rmse.size(); ++slice) {
-      if (!std::isfinite(s.main_effect_rmse[slice])) continue;
-      main_effect.x.push_back(s.main_effect_values[slice]);
-      main_effect.y.push_back(s.main_effect_rmse[slice]);
-    }
-    if (!main_effect.x.empty()) plot.series.push_back(std::move(main_effect));
+    add_finite_line(plot, "main effect", s.main_effect_values, s.main_effect_rmse);
     report::Series local;
     local.label = "moved 1/10 of box";
     local.style = report::SeriesStyle::kLineAndMarkers;
@@ -757,15 +767,7 @@ std::vector<std::filesystem::path> write_sensitivity_plots(const Calibration& ca
       local.y.push_back(rmse);
     }
     plot.series.push_back(std::move(local));
-    report::Series profile;
-    profile.label = "profile (others re-fitted)";
-    profile.style = report::SeriesStyle::kLineAndMarkers;
-    for (std::size_t k = 0; k < s.profile_values.size(); ++k) {
-      if (!std::isfinite(s.profile_rmse[k])) continue;
-      profile.x.push_back(s.profile_values[k]);
-      profile.y.push_back(s.profile_rmse[k]);
-    }
-    if (!profile.x.empty()) plot.series.push_back(std::move(profile));
+    add_finite_line(plot, "profile (others re-fitted)", s.profile_values, s.profile_rmse);
     plot.references.push_back(
         {.vertical = true, .value = calibration.best[p], .label = "calibrated"});
     for (const double bound : {s.interval_low, s.interval_high}) {
