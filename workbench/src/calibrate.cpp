@@ -404,6 +404,12 @@ ProfileSide trace_profile_side(const Evaluator& evaluator, std::size_t p, double
     root_rise_before = std::sqrt(std::max(0.0, rise));
     others_before = others;
   }
+  if (std::isnan(side.bound_u) && !side.open) {
+    spdlog::warn(
+        "calibrate: profile of parameter {} ({} side) not ended after 64 steps at {:.4g} "
+        "of its box: no bound reported that way",
+        p + 1, direction > 0.0 ? "upper" : "lower", u_before);
+  }
   return side;
 }
 

@@ -101,7 +101,8 @@ struct ParameterSensitivity {
   // overshoots by far, or that the twin refuses, is halved and tried again (down to 1/64). Unlike
   // the joint interval it follows a curved valley and exists where the curvature matrix is
   // singular. A bound the rise never reached inside the box is the box's edge, flagged open: the
-  // data do not bound the parameter that way.
+  // data do not bound the parameter that way. A side whose trace has not ended after 64 steps
+  // has a NaN bound (and a warning in the log).
   double profile_interval_low = 0.0;
   double profile_interval_high = 0.0;
   bool profile_low_open = false;
