@@ -648,10 +648,6 @@ Calibration calibrate(const Dataset& dataset, const model_tests::CommonParams& b
                                      factorial, options.threads, result.correlation);
   result.evaluations +=
       static_cast<int>(2 * parameters.size() + parameters.size() * (parameters.size() - 1) / 2);
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  for (ParameterSensitivity& s : result.sensitivity) {
-    s.profile_interval_low = s.profile_interval_high = nan;
-  }
   if (options.profile_fit_evaluations > 0) {
     result.evaluations +=
         trace_profiles(evaluator, parameters, x, result, options.profile_fit_evaluations,
@@ -761,18 +757,8 @@ std::vector<std::filesystem::path> write_sensitivity_plots(const Calibration& ca
     }
     if (!design.x.empty()) plot.series.push_back(std::move(design));
     add_finite_line(plot, "main effect", s.main_effect_values, s.main_effect_rmse);
-    report::Series local;
-    local.label = "moved 1/10 of box";
-    local.style = report::SeriesStyle::kLineAndMarkers;
-    const std::array<std::pair<double, double>, 3> around{{{s.value_down, s.rmse_down},
-                                                           {calibration.best[p], calibration.rmse},
-                                                           {s.value_up, s.rmse_up}}};
-    for (const auto& [value, rmse] : around) {
-      if (!std::isfinite(rmse)) continue;
-      local.x.push_back(value);
-      local.y.push_back(rmse);
-    }
-    plot.series.push_back(std::move(local));
+    add_finite_line(plot, "moved 1/10 of box", {s.value_down, calibration.best[p], s.value_up},
+                    {s.rmse_down, calibration.rmse, s.rmse_up});
     add_finite_line(plot, "profile (others re-fitted)", s.profile_values, s.profile_rmse);
     plot.references.push_back(
         {.vertical = true, .value = calibration.best[p], .label = "calibrated"});

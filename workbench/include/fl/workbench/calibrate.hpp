@@ -11,6 +11,7 @@
 #pragma once
 
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -103,8 +104,8 @@ struct ParameterSensitivity {
   // singular. A bound the rise never reached inside the box is the box's edge, flagged open: the
   // data do not bound the parameter that way. A side whose trace has not ended after 64 steps
   // has a NaN bound (and a warning in the log).
-  double profile_interval_low = 0.0;
-  double profile_interval_high = 0.0;
+  double profile_interval_low = std::numeric_limits<double>::quiet_NaN();
+  double profile_interval_high = std::numeric_limits<double>::quiet_NaN();
   bool profile_low_open = false;
   bool profile_high_open = false;
   // The traced profile, by value: each step's value and the re-fitted RMS there (the
