@@ -6,7 +6,8 @@ add_library(
   fl_twin_fillet STATIC
   ${CMAKE_CURRENT_LIST_DIR}/src/dem/mesh.cpp ${CMAKE_CURRENT_LIST_DIR}/src/dem/stl.cpp
   ${CMAKE_CURRENT_LIST_DIR}/src/dem/fillet_shape.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/src/dem/fillet_generator.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/src/dem/fillet_generator.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/src/dem/fillet_bend.cpp)
 target_include_directories(fl_twin_fillet PUBLIC ${CMAKE_CURRENT_LIST_DIR}/include)
 target_link_libraries(fl_twin_fillet PUBLIC Eigen3::Eigen spdlog::spdlog PRIVATE fl_build_flags)
 

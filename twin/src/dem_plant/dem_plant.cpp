@@ -10,6 +10,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "fl/twin/dem/fillet_bend.hpp"
 #include "fl/twin/dem/fillet_generator.hpp"
 
 namespace fl {
@@ -368,6 +369,17 @@ DemPlant::Pose DemPlant::fit_pose(const Fillet& fillet) const {
   return pose;
 }
 
+double DemPlant::in_plane_bend_per_mm(const Fillet& fillet, const Pose& pose) const {
+  const dem::State& s = sim_->state();
+  const dem::FilletTemplate& t = templates_[fillet.variant];
+  dem::InPlaneBendFit fit(pose.rotation);
+  // fit_pose has checked every index of this scan.
+  for (const std::uint32_t k : fillet.particles) {
+    fit.add(t.positions_m[s.id[k] - fillet.first_id], s.position_m[k] - fillet.centroid_m);
+  }
+  return fit.curvature_per_m() * kMm;
+}
+
 bool DemPlant::touching(std::size_t f) const {
   // A sphere of this fillet within contact (plus 0.5 mm for the soft overlap's rounding) of a
   // sphere of another: JKR holds touching fillets together, so contact is what a camera sees.
@@ -555,6 +567,7 @@ std::vector<DemFilletView> DemPlant::fillets() const {
     v.y_mm = fillet.centroid_m.y() / kMm;
     v.z_mm = fillet.centroid_m.z() / kMm;
     v.angle_rad = pose.angle_rad;
+    v.bend_per_mm = in_plane_bend_per_mm(fillet, pose);
     v.v_mps = fillet.velocity_m_per_s.x();
     v.min_s_mm = fillet.lower_m.x() / kMm;
     v.max_s_mm = fillet.upper_m.x() / kMm;

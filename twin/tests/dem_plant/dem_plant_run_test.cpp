@@ -65,6 +65,27 @@ TEST(DemPlantRun, ViewsCarryTheTableSizeOfTheirTemplate) {
   }
 }
 
+// A fillet as spawned is its template placed rigidly: no bend, at any heading and either side
+// up. The fit pairs each sphere with its own template position; a wrong pairing reads a bend.
+TEST(DemPlantRun, ASpawnedFilletIsNotBent) {
+  DemRig rig;
+  const double headings[] = {0.0, 0.9, 2.8, -1.7};
+  for (int k = 0; k < 4; ++k) {
+    DemFilletSpawn spawn;
+    spawn.variant = static_cast<std::uint8_t>(k);
+    spawn.angle_rad = headings[k];
+    spawn.side = k % 2 == 0 ? SideUp::kSkin : SideUp::kBone;
+    spawn.s_mm = 1900.0 + 300.0 * k;  // apart on the stopped line
+    ASSERT_TRUE(rig.plant->spawn_fillet(spawn));
+  }
+  const auto views = rig.plant->fillets();
+  ASSERT_EQ(views.size(), 4U);
+  for (const DemFilletView& view : views) {
+    // 1e-9 / mm: a radius of 1000 km, rounding in a fit over 100 mm coordinates.
+    EXPECT_NEAR(view.bend_per_mm, 0.0, 1e-9) << view.s_mm;
+  }
+}
+
 TEST(DemPlantRun, SameSeedAndThreadsGiveIdenticalImages) {
   // Feeder on (bulk and leveller run): fillets enter the takt belt from the seeded draws.
   auto make = [] {

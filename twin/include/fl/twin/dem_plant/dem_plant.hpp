@@ -90,6 +90,9 @@ struct DemFilletView {
   double y_mm = 0.0;
   double z_mm = 0.0;  // centroid height over the reject belt's plane (engine z)
   double angle_rad = 0.0;
+  // Curvature of the long axis in the belt plane (dem::InPlaneBendFit): positive turns it
+  // anticlockwise seen from above, thick end to tip. 0 for a fillet standing on end.
+  double bend_per_mm = 0.0;
   double v_mps = 0.0;  // centroid speed along the line
   double min_s_mm = 0.0;
   double max_s_mm = 0.0;
@@ -197,6 +200,7 @@ class DemPlant final : public Plant {
   void take_out_removed();
   void scan_particles();
   [[nodiscard]] Pose fit_pose(const Fillet& fillet) const;
+  [[nodiscard]] double in_plane_bend_per_mm(const Fillet& fillet, const Pose& pose) const;
   [[nodiscard]] bool touching(std::size_t f) const;
   [[nodiscard]] Hand hand_of(const Fillet& fillet) const;
   class FilletScene;  // the fillets as the camera emulator sees them
