@@ -3,6 +3,7 @@
 // directory of images, a VideoCapture device or video file) into an MCAP recording.
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <filesystem>
@@ -62,8 +63,13 @@ class PlantScene final : public rec::TwinScene {
         fillet.hand = view.hand;
         fillet.side = view.side;
         // The template's table 3.1 size, drawn at its nominal length: the DEM fillet is that
-        // mesh, not a scaled one. Its bending is not drawn (the sprite is rigid).
+        // mesh, not a scaled one.
         fillet.size_variant = view.size_variant;
+        // Drawn bent as the engine bent it in the belt plane. Tighter than the renderer's
+        // limit, the fillet is folded (on a plate, or over another); the arc is drawn at the
+        // limit, as close as a bend in the plane gets.
+        fillet.bend_per_mm =
+            std::clamp(view.bend_per_mm, -render::kMaxBendPerMm, render::kMaxBendPerMm);
         fillet.group_id = view.touching ? static_cast<int>(view.group_id) : -1;
         out.push_back(fillet);
       }

@@ -34,7 +34,50 @@ struct Sprite {
   cv::Point2d area_centroid_mm;
   double radius_mm = 0.0;               // bounding circle about the origin
   std::vector<cv::Point2d> outline_mm;  // silhouette boundary
+  // Centres of the silhouette's cells on a coarser grid (kInsideStepCells): the area a bent
+  // fillet covers and its centroid are summed over them.
+  std::vector<cv::Point2d> inside_mm;
   cv::Size2d size_mm;
+};
+constexpr int kInsideStepCells = 4;  // 1 mm: area and centroid to well under a pixel
+
+// FilletInstance::bend_per_mm: the fillet's straight frame (u along the axis, v to its left,
+// scaled mm) laid along a circular arc tangent to the u axis at the origin. A point keeps its
+// distance from the axis and its arc length along it.
+class Bend {
+ public:
+  explicit Bend(double curvature_per_mm)
+      // Under 1e-7 / mm (a radius of 10 km) the arc differs from the line by under 1 nm.
+      : curvature_(std::abs(curvature_per_mm) < 1e-7 ? 0.0 : curvature_per_mm) {}
+  [[nodiscard]] bool straight() const { return curvature_ == 0.0; }
+  // Straight frame -> bent.
+  [[nodiscard]] cv::Point2d bend(cv::Point2d straight_mm) const {
+    if (straight()) return straight_mm;
+    const double radius = 1.0 / curvature_;
+    const double turn = straight_mm.x * curvature_;
+    const double from_centre = radius - straight_mm.y;
+    return {from_centre * std::sin(turn), radius - from_centre * std::cos(turn)};
+  }
+  // Bent -> straight frame; `turn_rad` is how far the axis has turned at that point.
+  [[nodiscard]] cv::Point2d unbend(cv::Point2d bent_mm, double& turn_rad) const {
+    if (straight()) {
+      turn_rad = 0.0;
+      return bent_mm;
+    }
+    const double radius = 1.0 / curvature_;
+    // From the arc's centre; for a negative curvature the centre lies on the right, where
+    // (radius - v) is negative.
+    const double sign = curvature_ > 0.0 ? 1.0 : -1.0;
+    const double a = sign * bent_mm.x;
+    const double b = sign * (radius - bent_mm.y);
+    turn_rad = std::atan2(a, b);
+    return {radius * turn_rad, radius - sign * std::hypot(a, b)};
+  }
+  // Area scale of the map at a point of the straight frame (the arc's Jacobian).
+  [[nodiscard]] double area_factor(double v_mm) const { return 1.0 - curvature_ * v_mm; }
+
+ private:
+  double curvature_;
 };
 
 // Bilinear height at local (u, v); 0 outside.
@@ -131,6 +174,14 @@ Sprite make_sprite(const dem::TriangleMesh& mesh_m) {
   sprite.max_height_mm = max_height;
   sprite.radius_mm = std::sqrt(radius2) + kHeightCellMm;
   sprite.size_mm = {max_u - min_u, max_v - min_v};
+  for (int row = kInsideStepCells / 2; row < rows; row += kInsideStepCells) {
+    for (int col = kInsideStepCells / 2; col < cols; col += kInsideStepCells) {
+      if (sprite.height_mm(row, col) > 0.0) {
+        sprite.inside_mm.emplace_back(sprite.min_u_mm + col * kHeightCellMm,
+                                      sprite.min_v_mm + row * kHeightCellMm);
+      }
+    }
+  }
 
   cv::Mat mask;
   cv::compare(sprite.height_mm, 0.0, mask, cv::CMP_GT);
@@ -168,6 +219,30 @@ void check_instance(const FilletInstance& fillet, int shape_variants) {
   if (!(fillet.lift_mm >= 0.0) || !(fillet.lift_mm < 200.0)) {
     throw std::invalid_argument("FilletRenderer: lift_mm must be in [0, 200) mm");
   }
+  if (!(std::abs(fillet.bend_per_mm) <= kMaxBendPerMm)) {
+    throw std::invalid_argument("FilletRenderer: bend_per_mm must be finite and at most 1/50 mm");
+  }
+}
+
+// A point of the sprite's frame (unscaled local mm) where the fillet lays it on the belt.
+cv::Point2d local_to_belt(const FilletInstance& fillet, double cos_a, double sin_a,
+                          cv::Point2d local) {
+  const cv::Point2d laid =
+      Bend(fillet.bend_per_mm).bend({local.x * fillet.scale, local.y * fillet.scale});
+  return {fillet.x_mm + cos_a * laid.x - sin_a * laid.y,
+          fillet.y_mm + sin_a * laid.x + cos_a * laid.y};
+}
+
+// The sprite-frame point (unscaled local mm) the fillet lays at a belt point, and how far its
+// axis has turned there.
+cv::Point2d belt_to_local(const FilletInstance& fillet, double cos_a, double sin_a,
+                          cv::Point2d belt_mm, double& turn_rad) {
+  const double dx = belt_mm.x - fillet.x_mm;
+  const double dy = belt_mm.y - fillet.y_mm;
+  const cv::Point2d straight =
+      Bend(fillet.bend_per_mm)
+          .unbend({cos_a * dx + sin_a * dy, -sin_a * dx + cos_a * dy}, turn_rad);
+  return {straight.x / fillet.scale, straight.y / fillet.scale};
 }
 
 // Deterministic per-cell hash in [-1, 1]: belt grain that moves with the belt.
@@ -224,11 +299,8 @@ struct PreparedFillet {
   double fibre_cos = 1.0, fibre_sin = 0.0;
 };
 
-// A point of the sprite's frame (unscaled local mm) where it lies on the belt.
 cv::Point2d outline_point_on_belt(const PreparedFillet& p, cv::Point2d local) {
-  const double u = local.x * p.instance.scale;
-  const double v = local.y * p.instance.scale;
-  return {p.instance.x_mm + p.cos_a * u - p.sin_a * v, p.instance.y_mm + p.sin_a * u + p.cos_a * v};
+  return local_to_belt(p.instance, p.cos_a, p.sin_a, local);
 }
 
 // Least distance between two closed outlines (0 where a vertex of one lies inside the other).
@@ -269,6 +341,16 @@ PreparedFillet prepare(const Sprite& sprite, const FilletInstance& fillet, const
   p.cos_a = std::cos(fillet.angle_rad);
   p.sin_a = std::sin(fillet.angle_rad);
   p.reach_mm = sprite.radius_mm * fillet.scale;
+  if (!Bend(fillet.bend_per_mm).straight()) {
+    // The farthest point of a bent silhouette from the pose lies on its outline.
+    double reach2 = 0.0;
+    for (const cv::Point2d& local : sprite.outline_mm) {
+      const cv::Point2d d =
+          local_to_belt(fillet, 1.0, 0.0, local) - cv::Point2d(fillet.x_mm, fillet.y_mm);
+      reach2 = std::max(reach2, d.dot(d));
+    }
+    p.reach_mm = std::sqrt(reach2) + kHeightCellMm * fillet.scale;
+  }
   p.skin = fillet.side == SideUp::kSkin;
   cv::RNG rng(scene.seed * 7919ULL + index * 104729ULL + 17ULL);
   const auto& base = p.skin ? kSkinBgr : kBoneBgr;
@@ -296,8 +378,9 @@ PreparedFillet prepare(const Sprite& sprite, const FilletInstance& fillet, const
   return p;
 }
 
-// Meat radiance at local (u, v) (unscaled mm) with height h_mm (scaled), given the belt under it.
-cv::Vec3d shade(const PreparedFillet& p, double u, double v, double h_scaled_mm,
+// Meat radiance at local (u, v) (unscaled mm) with height h_mm (scaled), given the belt under it,
+// where the fillet's axis has turned by turn_rad from its heading (a bent fillet).
+cv::Vec3d shade(const PreparedFillet& p, double u, double v, double h_scaled_mm, double turn_rad,
                 const cv::Vec3d& belt_under) {
   const Sprite& s = *p.sprite;
   const double scale = p.instance.scale;
@@ -306,7 +389,12 @@ cv::Vec3d shade(const PreparedFillet& p, double u, double v, double h_scaled_mm,
   constexpr double kStep = 0.75;
   const double hu = sample_height(s, u + kStep, v) - sample_height(s, u - kStep, v);
   const double hv = sample_height(s, u, v + kStep) - sample_height(s, u, v - kStep);
-  cv::Vec3d normal(-hu / (2 * kStep), -hv / (2 * kStep), 1.0);
+  const double slope_u = -hu / (2 * kStep);
+  const double slope_v = -hv / (2 * kStep);
+  // The surface turns with the axis: the normal into the heading's frame, where the light is.
+  const double cos_t = std::cos(turn_rad);
+  const double sin_t = std::sin(turn_rad);
+  cv::Vec3d normal(cos_t * slope_u - sin_t * slope_v, sin_t * slope_u + cos_t * slope_v, 1.0);
   normal /= cv::norm(normal);
   const cv::Vec3d& light = p.light_local;
   const double lambert = std::max(0.0, normal.dot(light)) / light[2];
@@ -435,24 +523,27 @@ RenderedFrame FilletRenderer::render(const RenderCamera& camera, const Scene& sc
           // The highest fillet surface over this point is the one seen: its own thickness
           // plus its lift where it lies on another. Shading uses the thickness.
           const PreparedFillet* top = nullptr;
-          double top_surface = 0.0, top_height = 0.0, top_u = 0.0, top_v = 0.0;
+          double top_surface = 0.0, top_height = 0.0, top_turn = 0.0;
+          cv::Point2d top_local;
           for (const auto& p : prepared) {
-            const double dx = belt_mm.x - p.instance.x_mm;
-            const double dy = belt_mm.y - p.instance.y_mm;
-            if (std::abs(dx) > p.reach_mm || std::abs(dy) > p.reach_mm) continue;
-            const double u = (p.cos_a * dx + p.sin_a * dy) / p.instance.scale;
-            const double v = (-p.sin_a * dx + p.cos_a * dy) / p.instance.scale;
-            const double h = sample_height(*p.sprite, u, v) * p.instance.scale;
+            if (std::abs(belt_mm.x - p.instance.x_mm) > p.reach_mm ||
+                std::abs(belt_mm.y - p.instance.y_mm) > p.reach_mm) {
+              continue;
+            }
+            double turn = 0.0;
+            const cv::Point2d local = belt_to_local(p.instance, p.cos_a, p.sin_a, belt_mm, turn);
+            const double h = sample_height(*p.sprite, local.x, local.y) * p.instance.scale;
             const double surface = h > 0.0 ? h + p.instance.lift_mm : 0.0;
             if (surface > top_surface) {
               top_surface = surface;
               top_height = h;
               top = &p;
-              top_u = u;
-              top_v = v;
+              top_local = local;
+              top_turn = turn;
             }
           }
-          sum += top == nullptr ? belt : shade(*top, top_u, top_v, top_height, belt);
+          sum += top == nullptr ? belt
+                                : shade(*top, top_local.x, top_local.y, top_height, top_turn, belt);
         }
       }
       out[col] = cv::Vec3f(sum * (1.0 / (n * n)));
@@ -504,6 +595,22 @@ RenderedFrame FilletRenderer::render(const RenderCamera& camera, const Scene& sc
     truth.centre_px = belt_to_pixel(camera, {p.instance.x_mm, p.instance.y_mm});
     truth.silhouette_area_mm2 = p.sprite->area_mm2 * p.instance.scale * p.instance.scale;
     truth.silhouette_centroid_mm = outline_point_on_belt(p, p.sprite->area_centroid_mm);
+    const Bend bend(p.instance.bend_per_mm);
+    if (!bend.straight()) {
+      // Bent, the area centroid is not the bent straight centroid (the arc moves the ends
+      // sideways more than the middle): sum the cells where they lie, weighted by how the
+      // arc stretches them.
+      double weight = 0.0;
+      cv::Point2d moment;
+      for (const cv::Point2d& local : p.sprite->inside_mm) {
+        const double w = bend.area_factor(local.y * p.instance.scale);
+        weight += w;
+        moment += w * outline_point_on_belt(p, local);
+      }
+      const double cell_mm2 = std::pow(kInsideStepCells * kHeightCellMm * p.instance.scale, 2);
+      truth.silhouette_area_mm2 = weight * cell_mm2;
+      truth.silhouette_centroid_mm = moment / weight;
+    }
     frame.truth.push_back(truth);
   }
   return frame;
@@ -573,13 +680,10 @@ double FilletRenderer::silhouette_height_mm(const FilletInstance& fillet,
                                             cv::Point2d belt_mm) const {
   check_instance(fillet, sprites_->shape_variants);
   const Sprite& sprite = sprites_->by_index[sprite_index(fillet)];
-  const double c = std::cos(fillet.angle_rad);
-  const double s = std::sin(fillet.angle_rad);
-  const double dx = belt_mm.x - fillet.x_mm;
-  const double dy = belt_mm.y - fillet.y_mm;
-  return sample_height(sprite, (c * dx + s * dy) / fillet.scale,
-                       (-s * dx + c * dy) / fillet.scale) *
-         fillet.scale;
+  double turn_rad = 0.0;
+  const cv::Point2d local = belt_to_local(fillet, std::cos(fillet.angle_rad),
+                                          std::sin(fillet.angle_rad), belt_mm, turn_rad);
+  return sample_height(sprite, local.x, local.y) * fillet.scale;
 }
 
 std::vector<cv::Point2d> FilletRenderer::silhouette_outline_mm(const FilletInstance& fillet) const {
@@ -589,11 +693,7 @@ std::vector<cv::Point2d> FilletRenderer::silhouette_outline_mm(const FilletInsta
   const double s = std::sin(fillet.angle_rad);
   std::vector<cv::Point2d> outline;
   outline.reserve(sprite.outline_mm.size());
-  for (const auto& local : sprite.outline_mm) {
-    const double u = local.x * fillet.scale;
-    const double v = local.y * fillet.scale;
-    outline.emplace_back(fillet.x_mm + c * u - s * v, fillet.y_mm + s * u + c * v);
-  }
+  for (const auto& local : sprite.outline_mm) outline.push_back(local_to_belt(fillet, c, s, local));
   return outline;
 }
 

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "render_support.hpp"
@@ -243,6 +244,115 @@ TEST(FilletRenderer, AFilletLyingOnAnotherIsTheOneSeenWhereTheyOverlap) {
   }
   EXPECT_GT(overlap_pixels, 100);  // 30 mm of overlap: thousands of square millimetres
   EXPECT_EQ(differing, 0);
+}
+
+// The belt points (pixel centres, mm) of a cleanly rendered fillet on the blue belt, in the
+// frame of the pose (u along `heading_rad`, v to its left, from `origin`): the meat's red
+// channel is above 200 where the belt's is 35, so half way between splits them. Thin meat lets
+// the belt through, so the mask ends where the fillet is about 2 mm thick, inside the outline.
+std::vector<cv::Point2d> meat_pixels(const render::RenderCamera& camera, const cv::Mat& bgr,
+                                     cv::Point2d origin, double heading_rad) {
+  const double c = std::cos(heading_rad);
+  const double s = std::sin(heading_rad);
+  std::vector<cv::Point2d> points;
+  for (int row = 0; row < bgr.rows; ++row) {
+    for (int col = 0; col < bgr.cols; ++col) {
+      if (bgr.at<cv::Vec3b>(row, col)[2] < 128) continue;
+      const cv::Point2d d = render::pixel_to_belt(camera, {col + 0.0, row + 0.0}) - origin;
+      points.emplace_back(c * d.x + s * d.y, -s * d.x + c * d.y);
+    }
+  }
+  return points;
+}
+
+cv::Point2d mean_of(const std::vector<cv::Point2d>& points) {
+  cv::Point2d sum;
+  for (const cv::Point2d& p : points) sum += p;
+  return sum / static_cast<double>(points.size());
+}
+
+// A bent fillet is its straight shape laid along the arc: each point keeps its arc length along
+// the axis and its distance from it, so the area at distance v from the axis is stretched by
+// (1 - k v). The straight picture's meat pixels, carried along the arc with that weight, must
+// predict the bent picture's: same area within 1 % (edge pixels) and the same centroid within
+// 0.3 mm (two thirds of a 0.47 mm pixel). Checked at the DEM line's tightest bends
+// (dem::InPlaneBendFit on the multilane: up to about 1/90 mm), both ways, at two headings.
+TEST(FilletRenderer, BentFilletIsItsStraightShapeLaidAlongTheArc) {
+  const auto camera = camera_640();
+  const double pixel_mm2 = std::abs(cv::determinant(cv::Mat(camera.belt_to_image.inv())));
+  for (const double heading : {0.3, -2.4}) {
+    render::FilletInstance fillet;
+    fillet.x_mm = 5.0;
+    fillet.y_mm = -3.0;
+    fillet.angle_rad = heading;
+    render::Scene scene;
+    scene.fillets = {fillet};
+    const cv::Point2d pose(fillet.x_mm, fillet.y_mm);
+    const auto straight_frame = renderer().render(camera, scene);
+    const auto straight = meat_pixels(camera, straight_frame.bgr, pose, heading);
+    for (const double bend : {1.0 / 90.0, -1.0 / 150.0}) {
+      SCOPED_TRACE("heading " + std::to_string(heading) + " bend " + std::to_string(bend));
+      const double radius = 1.0 / bend;
+      double predicted_area = 0.0;
+      cv::Point2d predicted_moment;
+      for (const cv::Point2d& p : straight) {
+        const double weight = 1.0 - bend * p.y;
+        const cv::Point2d laid((radius - p.y) * std::sin(p.x * bend),
+                               radius - (radius - p.y) * std::cos(p.x * bend));
+        predicted_area += weight;
+        predicted_moment += weight * laid;
+      }
+      const cv::Point2d predicted_centroid = predicted_moment / predicted_area;
+      predicted_area *= pixel_mm2;
+
+      scene.fillets[0].bend_per_mm = bend;
+      const auto frame = renderer().render(camera, scene);
+      const auto bent = meat_pixels(camera, frame.bgr, pose, heading);
+      const cv::Point2d bent_centroid = mean_of(bent);
+      const double bent_area = static_cast<double>(bent.size()) * pixel_mm2;
+      EXPECT_NEAR(bent_area, predicted_area, 0.01 * predicted_area);
+      EXPECT_NEAR(bent_centroid.x, predicted_centroid.x, 0.3);
+      EXPECT_NEAR(bent_centroid.y, predicted_centroid.y, 0.3);
+      // The case is a real bend: the centroid moved sideways by several pixels.
+      EXPECT_GT(std::abs(bent_centroid.y - mean_of(straight).y), 3.0);
+
+      // The truth moves as the pixels do (its silhouette is the whole outline, the mask ends
+      // at 2 mm of meat, so compare the changes from straight to bent).
+      const render::FilletTruth& truth = frame.truth.at(0);
+      const render::FilletTruth& flat = straight_frame.truth.at(0);
+      const double c = std::cos(heading), s = std::sin(heading);
+      const cv::Point2d moved = truth.silhouette_centroid_mm - flat.silhouette_centroid_mm;
+      const cv::Point2d pixels_moved = bent_centroid - mean_of(straight);
+      EXPECT_NEAR(c * moved.x + s * moved.y, pixels_moved.x, 0.3);
+      EXPECT_NEAR(-s * moved.x + c * moved.y, pixels_moved.y, 0.3);
+      EXPECT_NEAR(truth.silhouette_area_mm2 / flat.silhouette_area_mm2,
+                  static_cast<double>(bent.size()) / static_cast<double>(straight.size()), 0.01);
+
+      // The outline the truth and make_touching_partner use (laid forward along the arc)
+      // agrees with the height the picture is drawn from (taken back off the arc): each outline
+      // point lies on the silhouette. Outline points are the silhouette's edge cells, and a
+      // rounding in the two maps can put a few a cell outside.
+      int outside = 0;
+      const auto outline = renderer().silhouette_outline_mm(scene.fillets[0]);
+      for (const cv::Point2d& point : outline) {
+        outside += renderer().silhouette_height_mm(scene.fillets[0], point) > 0.0 ? 0 : 1;
+      }
+      EXPECT_LE(outside, static_cast<int>(outline.size() / 100)) << outline.size();
+    }
+  }
+}
+
+// Bent tighter than the renderer can lay in the plane, or not a number: refused, not drawn.
+TEST(FilletRenderer, BendBeyondTheDrawableIsRefused) {
+  render::Scene scene;
+  scene.fillets.emplace_back();
+  for (const double bend : {1.05 * render::kMaxBendPerMm, -1.05 * render::kMaxBendPerMm,
+                            std::numeric_limits<double>::quiet_NaN()}) {
+    scene.fillets[0].bend_per_mm = bend;
+    EXPECT_THROW((void)renderer().render(camera_640(), scene), std::invalid_argument) << bend;
+  }
+  scene.fillets[0].bend_per_mm = render::kMaxBendPerMm;
+  EXPECT_NO_THROW((void)renderer().render(camera_640(), scene));
 }
 
 // A camera tilted 5 and 3 degrees (perspective) with its exact homography: the polygon moments

@@ -109,7 +109,16 @@ struct FilletInstance {
   SideUp side = SideUp::kSkin;
   int group_id = -1;     // >= 0: fillets sharing it touch (one blob); ground truth only
   double lift_mm = 0.0;  // lying on another fillet: its surface this much higher (>= 0)
+  // Curvature of the long axis in the belt plane, 1/mm (a limp fillet lies bent on the belt;
+  // the DEM twin reports it, dem::InPlaneBendFit). The fillet's straight shape is laid along a
+  // circular arc tangent to angle_rad at (x_mm, y_mm), so angle_rad stays the heading at the
+  // pose point. Positive turns the tip anticlockwise. At most kMaxBendPerMm in magnitude.
+  double bend_per_mm = 0.0;
 };
+// Tightest bend drawn: a 50 mm radius keeps the inner edge of a fillet of up to 1.2 times the
+// 72 mm width outside the arc's centre. A fillet bent tighter is folded, which an arc in the
+// belt plane cannot draw.
+inline constexpr double kMaxBendPerMm = 1.0 / 50.0;
 
 struct Scene {
   std::vector<FilletInstance> fillets;
@@ -128,8 +137,8 @@ struct FilletTruth {
   // touch or overlap; infinity when it is alone). A pair closer than the vision's least gap
   // is meant to be reported not singulated although its silhouettes do not touch.
   double gap_to_nearest_mm = std::numeric_limits<double>::infinity();
-  cv::Point2d centre_px;  // image position of the pose
-  double silhouette_area_mm2 = 0.0;
+  cv::Point2d centre_px;             // image position of the pose
+  double silhouette_area_mm2 = 0.0;  // as laid on the belt, bent if it is
   // Belt position of the silhouette's area centroid (the pose is the volume centroid).
   cv::Point2d silhouette_centroid_mm;
 };
