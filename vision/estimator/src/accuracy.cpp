@@ -87,13 +87,18 @@ void AccuracyTally::add_frame(const FrameResult& result, const std::vector<TrueF
 
   for (const TrueFillet& fillet : truth) {
     if (!fillet.singulated || !fillet.fully_visible) continue;
-    if (fillet.gap_mm < options_.near_gap_mm) {
-      // Right when no blob near it claims a singulated fillet there.
-      ++counts_.near_singles;
+    if (fillet.gap_mm < options_.near_gap_mm + options_.near_gap_band_mm) {
+      // A near pair is right when no blob near it claims a singulated fillet there.
       const bool called_single = std::any_of(blobs.begin(), blobs.end(), [&](const auto* blob) {
         return blob->singulated && distance_mm(*blob, fillet) < options_.match_gate_mm;
       });
-      if (!called_single) ++counts_.near_reported_not_singulated;
+      if (fillet.gap_mm < options_.near_gap_mm) {
+        ++counts_.near_singles;
+        if (!called_single) ++counts_.near_reported_not_singulated;
+      } else {
+        ++counts_.borderline_singles;
+        if (!called_single) ++counts_.borderline_reported_not_singulated;
+      }
       continue;
     }
     ++counts_.singles;

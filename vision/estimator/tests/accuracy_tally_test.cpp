@@ -202,6 +202,35 @@ TEST(AccuracyTally, ASingleWithinTheLeastGapIsANearPair) {
   EXPECT_EQ(without_option.summary().singles_flagged, 1U);
 }
 
+// A single whose gap lies just above the least gap, within the band the estimator measures
+// gaps to, is borderline: either answer is right, and it is scored neither as a single nor as
+// a near pair.
+TEST(AccuracyTally, ASingleJustBeyondTheLeastGapIsBorderline) {
+  AccuracyOptions options;
+  options.near_gap_mm = 4.0;
+  options.near_gap_band_mm = 1.0;
+  TrueFillet borderline = single(0.0, 0.0, 0.0, Hand::kLeft, SideUp::kSkin);
+  borderline.gap_mm = 4.4;  // in [4, 5): borderline
+  TrueFillet clear = single(200.0, 0.0, 0.0, Hand::kLeft, SideUp::kSkin);
+  clear.gap_mm = 5.0;  // at the band's end: a single
+  FrameResult frame;
+  frame.blobs.push_back(fillet_blob(0.0F, 0.0F, 0.0F, Hand::kUnknown, SideUp::kUnknown, false));
+  frame.blobs.push_back(fillet_blob(200.0F, 0.0F, 0.0F, Hand::kLeft, SideUp::kSkin));
+  FrameResult called_single;
+  called_single.blobs.push_back(fillet_blob(0.0F, 0.0F, 0.0F, Hand::kLeft, SideUp::kSkin));
+
+  AccuracyTally tally(options);
+  tally.add_frame(frame, {borderline, clear});
+  tally.add_frame(called_single, {borderline});
+  const AccuracySummary s = tally.summary();
+  EXPECT_EQ(s.borderline_singles, 2U);
+  EXPECT_EQ(s.borderline_reported_not_singulated, 1U);
+  EXPECT_EQ(s.near_singles, 0U);
+  EXPECT_EQ(s.singles, 1U);  // only the clear one
+  EXPECT_EQ(s.singles_flagged, 0U);
+  EXPECT_DOUBLE_EQ(s.hand_correct_share, 1.0);
+}
+
 // A detected single with the wrong hand or side, or one left unknown, is listed with its frame,
 // its true pose and what the estimator said, so that `vision eval` can show the frame; a right
 // one is not.

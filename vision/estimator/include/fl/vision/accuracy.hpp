@@ -48,6 +48,11 @@ struct AccuracyOptions {
   // pair not singulated by design (EstimatorParams::min_gap_mm, the least gap the flip
   // plates handle), so it is tallied apart from the singles. 0: every single is a single.
   double near_gap_mm = 0.0;
+  // Singles whose gap lies within this above near_gap_mm are borderline: the estimator
+  // measures the gap on its working pixels, each blob's edge to within half a pixel, so it
+  // may rightly call them either way. They are tallied apart, scored neither as singles nor
+  // as near pairs.
+  double near_gap_band_mm = 0.0;
 };
 
 // Confusion matrix: rows the truth (left/right or skin/bone), columns the estimate
@@ -82,6 +87,9 @@ struct AccuracySummary {
   // of them were reported not singulated (a flagged blob, or one blob with the neighbour).
   std::uint64_t near_singles = 0;
   std::uint64_t near_reported_not_singulated = 0;
+  // Borderline: within near_gap_band_mm above the least gap (either answer is right).
+  std::uint64_t borderline_singles = 0;
+  std::uint64_t borderline_reported_not_singulated = 0;
 };
 
 // A single fillet wholly in view that no fillet blob matched, and what the estimator saw
