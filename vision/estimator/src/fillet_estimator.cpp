@@ -52,6 +52,139 @@ Otsu otsu(const std::array<double, 256>& histogram) {
   return best;
 }
 
+// A point in the frame of an axis through `origin` at `axis_rad` (u along, v to its left).
+cv::Point2d to_axis_frame(cv::Point2d p, cv::Point2d origin, double axis_rad) {
+  const double c = std::cos(axis_rad), s = std::sin(axis_rad);
+  const cv::Point2d d = p - origin;
+  return {c * d.x + s * d.y, -s * d.x + c * d.y};
+}
+
+cv::Point2d from_axis_frame(cv::Point2d uv, cv::Point2d origin, double axis_rad) {
+  const double c = std::cos(axis_rad), s = std::sin(axis_rad);
+  return origin + cv::Point2d(c * uv.x - s * uv.y, s * uv.x + c * uv.y);
+}
+
+// The arc map of a bent fillet (EstimatorParams, item 6b): the straight frame laid along a
+// circular arc of `curvature_per_mm` tangent to the u axis at the origin, each point keeping
+// its arc length along the axis and its distance from it.
+cv::Point2d lay_on_arc(cv::Point2d straight, double curvature_per_mm) {
+  if (curvature_per_mm == 0.0) return straight;
+  const double radius = 1.0 / curvature_per_mm;
+  const double turn = straight.x * curvature_per_mm;
+  const double from_centre = radius - straight.y;
+  return {from_centre * std::sin(turn), radius - from_centre * std::cos(turn)};
+}
+
+cv::Point2d straighten(cv::Point2d bent, double curvature_per_mm) {
+  if (curvature_per_mm == 0.0) return bent;
+  const double radius = 1.0 / curvature_per_mm;
+  const double sign = curvature_per_mm > 0.0 ? 1.0 : -1.0;  // the arc's centre is on that side
+  const double a = sign * bent.x;
+  const double b = sign * (radius - bent.y);
+  return {radius * std::atan2(a, b), radius - sign * std::hypot(a, b)};
+}
+
+// Where a blob's fillet axis runs and how it is bent: the arc through `origin` tangent to
+// `axis_rad` there, of `curvature_per_mm`. `contour` is the outline straightened along it, in
+// that axis' frame.
+struct AxisArc {
+  cv::Point2d origin;
+  double axis_rad = 0.0;
+  double curvature_per_mm = 0.0;
+  std::vector<cv::Point2d> contour;
+};
+
+// Fits the bend of a fillet outline (belt mm), starting from its area centroid and principal
+// axis. A fillet's section centre sits a fixed share of its half-width to one side (the bulging
+// edge, thesis figure 3.1; the twin's mesh, FilletShapeParams::edge_bias), so across the
+// length its outline's midline follows m(u) = a + b u + beta w(u) / 2, with w(u) the width;
+// a bend in the belt plane adds k u^2 / 2 to both edges and keeps the width. Least squares of
+// the midline over slices along the axis gives k, beta and the axis (a, b); the outline is
+// straightened with k and the fit repeated on it, as the first axis is the bent shape's.
+AxisArc fit_axis_arc(const std::vector<cv::Point2f>& contour_mm, cv::Point2d centroid,
+                     double principal_rad, const EstimatorParams& params, double mm_per_px) {
+  AxisArc arc;
+  arc.origin = centroid;
+  arc.axis_rad = principal_rad;
+  arc.contour.resize(contour_mm.size());
+  const double slice_mm = std::max(params.bend_slice_mm, 2.5 * mm_per_px);
+  std::vector<double> high, low;
+  for (int pass = 0; pass <= params.bend_fit_passes; ++pass) {
+    double min_u = 1e300, max_u = -1e300;
+    for (std::size_t i = 0; i < contour_mm.size(); ++i) {
+      arc.contour[i] = straighten(
+          to_axis_frame(cv::Point2d(contour_mm[i].x, contour_mm[i].y), arc.origin, arc.axis_rad),
+          arc.curvature_per_mm);
+      min_u = std::min(min_u, arc.contour[i].x);
+      max_u = std::max(max_u, arc.contour[i].x);
+    }
+    if (pass == params.bend_fit_passes || params.bend_fit_passes == 0) break;
+    const auto slices = static_cast<std::size_t>(std::ceil((max_u - min_u) / slice_mm)) + 1;
+    high.assign(slices, -1e300);
+    low.assign(slices, 1e300);
+    for (const cv::Point2d& p : arc.contour) {
+      const auto slice = static_cast<std::size_t>((p.x - min_u) / slice_mm);
+      high[slice] = std::max(high[slice], p.y);
+      low[slice] = std::min(low[slice], p.y);
+    }
+    // Normal equations of mid = a + b u + c u^2 + beta w / 2 over the slices wide enough to
+    // have two edges (the rounded ends have one point or two).
+    cv::Matx44d normal = cv::Matx44d::zeros();
+    cv::Vec4d rhs(0, 0, 0, 0);
+    int rows = 0;
+    for (std::size_t slice = 0; slice < slices; ++slice) {
+      const double width = high[slice] - low[slice];
+      if (!(width >= params.bend_min_slice_width_mm)) continue;
+      const double u = min_u + (static_cast<double>(slice) + 0.5) * slice_mm;
+      const cv::Vec4d row(1.0, u, u * u, 0.5 * width);
+      const double mid = 0.5 * (high[slice] + low[slice]);
+      normal += row * row.t();
+      rhs += mid * row;
+      ++rows;
+    }
+    if (rows < 8) break;  // too short a blob to tell a bend: keep what is fitted
+    cv::Vec4d coefficients;
+    if (!cv::solve(normal, rhs, coefficients, cv::DECOMP_SVD)) break;
+    // The residual bend and axis, in the straightened frame; re-anchored on the fitted
+    // midline at u = 0 (on the arc, as laid). Not on the intercept a alone: where the width
+    // changes little along the length, a and beta trade off against each other, while their
+    // sum, the midline, is what the slices measure.
+    const double curvature = std::clamp(arc.curvature_per_mm + 2.0 * coefficients[2],
+                                        -params.max_bend_per_mm, params.max_bend_per_mm);
+    if (!std::isfinite(curvature)) break;
+    const auto centre_slice = static_cast<std::size_t>(std::max(0.0, -min_u) / slice_mm);
+    const double centre_width =
+        centre_slice < slices ? std::max(0.0, high[centre_slice] - low[centre_slice]) : 0.0;
+    const double midline_at_zero = coefficients[0] + 0.5 * coefficients[3] * centre_width;
+    arc.origin = from_axis_frame(lay_on_arc({0.0, midline_at_zero}, arc.curvature_per_mm),
+                                 arc.origin, arc.axis_rad);
+    arc.axis_rad += std::atan(coefficients[1]);
+    arc.curvature_per_mm = curvature;
+  }
+  return arc;
+}
+
+// Deepest point of a closed outline inside its convex hull (the hull's vertex indices in
+// outline order), from each hull edge to the outline points between its ends.
+double deepest_defect(const std::vector<cv::Point2d>& outline, std::vector<int> hull) {
+  if (hull.size() < 3) return 0.0;
+  std::sort(hull.begin(), hull.end());
+  double deepest = 0.0;
+  const std::size_t n = outline.size();
+  for (std::size_t h = 0; h < hull.size(); ++h) {
+    const auto from = static_cast<std::size_t>(hull[h]);
+    const auto to = static_cast<std::size_t>(hull[(h + 1) % hull.size()]);
+    const cv::Point2d edge = outline[to] - outline[from];
+    const double length = std::hypot(edge.x, edge.y);
+    if (length <= 0.0) continue;
+    for (std::size_t i = (from + 1) % n; i != to; i = (i + 1) % n) {
+      const cv::Point2d d = outline[i] - outline[from];
+      deepest = std::max(deepest, std::abs(edge.x * d.y - edge.y * d.x) / length);
+    }
+  }
+  return deepest;
+}
+
 }  // namespace
 
 std::string_view to_string(FrameStatus status) {
@@ -364,48 +497,68 @@ BlobResult FilletEstimator::measure_blob(const std::vector<cv::Point>& contour) 
   }
   const double cx = m.m10 / m.m00;
   const double cy = m.m01 / m.m00;
-  // Central moments normalised by the area (OpenCV's mu are sums over the polygon).
-  const double a = f.area_mm2;
-  const double mu20 = m.mu20 / a, mu11 = m.mu11 / a, mu02 = m.mu02 / a;
-  const double mu30 = m.mu30 / a, mu21 = m.mu21 / a, mu12 = m.mu12 / a, mu03 = m.mu03 / a;
-  double theta = 0.5 * std::atan2(2.0 * mu11, mu20 - mu02);
-  const auto skewness = [&](double angle, double& along, double& across) {
-    const double c = std::cos(angle), s = std::sin(angle);
+  // Central moments normalised by the area (OpenCV's mu are sums over the polygon): the
+  // principal axis, turned so that the third moment along it (the long tail) points at the
+  // tip, and the third moment across it.
+  struct Shape {
+    double axis_rad = 0.0;
+    double along = 0.0;   // skewness along the axis, > 0 after turning
+    double across = 0.0;  // skewness across it, + = the long tail on the left
+  };
+  const auto shape_of = [](const cv::Moments& mo) {
+    const double area = std::abs(mo.m00);
+    const double mu20 = mo.mu20 / area, mu11 = mo.mu11 / area, mu02 = mo.mu02 / area;
+    const double mu30 = mo.mu30 / area, mu21 = mo.mu21 / area, mu12 = mo.mu12 / area;
+    const double mu03 = mo.mu03 / area;
+    Shape shape;
+    shape.axis_rad = 0.5 * std::atan2(2.0 * mu11, mu20 - mu02);
+    const double c = std::cos(shape.axis_rad), s = std::sin(shape.axis_rad);
     const double var_u = c * c * mu20 + 2 * c * s * mu11 + s * s * mu02;
     const double var_v = s * s * mu20 - 2 * c * s * mu11 + c * c * mu02;
     const double m_uuu =
         c * c * c * mu30 + 3 * c * c * s * mu21 + 3 * c * s * s * mu12 + s * s * s * mu03;
     const double m_vvv =
         -s * s * s * mu30 + 3 * s * s * c * mu21 - 3 * s * c * c * mu12 + c * c * c * mu03;
-    along = m_uuu / std::pow(std::max(var_u, 1e-12), 1.5);
-    across = m_vvv / std::pow(std::max(var_v, 1e-12), 1.5);
+    shape.along = m_uuu / std::pow(std::max(var_u, 1e-12), 1.5);
+    shape.across = m_vvv / std::pow(std::max(var_v, 1e-12), 1.5);
+    if (shape.along < 0.0) {  // the long tail points at the tip
+      shape.axis_rad += std::numbers::pi;
+      shape.along = -shape.along;
+      shape.across = -shape.across;
+    }
+    return shape;
   };
-  double along = 0.0, across = 0.0;
-  skewness(theta, along, across);
-  if (along < 0.0) {  // the long tail points at the tip
-    theta += std::numbers::pi;
-    along = -along;
-    across = -across;
+  const Shape raw = shape_of(m);
+
+  // The outline straightened along its fitted arc (item 6b): a limp fillet lies bent, and the
+  // thick end, the bulge, the singulation and the pose are read on its straight shape.
+  AxisArc arc = fit_axis_arc(contour_mm, {cx, cy}, raw.axis_rad, params_, work_mm_per_px);
+  std::vector<cv::Point2f> straight(arc.contour.begin(), arc.contour.end());
+  cv::Moments ms = cv::moments(straight);
+  if (!(std::abs(std::abs(ms.m00) - f.area_mm2) <= 0.05 * f.area_mm2)) {
+    // A fit that folds the outline over itself (not a single bent fillet): read it unbent.
+    EstimatorParams unbent = params_;
+    unbent.bend_fit_passes = 0;
+    arc = fit_axis_arc(contour_mm, {cx, cy}, raw.axis_rad, unbent, work_mm_per_px);
+    straight.assign(arc.contour.begin(), arc.contour.end());
+    ms = cv::moments(straight);
   }
+  f.bend_per_mm = arc.curvature_per_mm;
+  const Shape shape = shape_of(ms);
+  const double along = shape.along;
+  const double across = shape.across;
   f.axis_skewness = along;
   f.bulge_skewness = across;
   const bool bulge_left = across > 0.0;
 
-  // Singulation.
+  // Singulation, on the straightened outline: a bent single is as convex as a straight one.
   std::vector<int> hull_indices;
-  cv::convexHull(contour, hull_indices, false, false);
-  std::vector<cv::Point> hull;
-  for (int i : hull_indices) hull.push_back(contour[static_cast<std::size_t>(i)]);
+  cv::convexHull(straight, hull_indices, false, false);
+  std::vector<cv::Point2f> hull;
+  for (int i : hull_indices) hull.push_back(straight[static_cast<std::size_t>(i)]);
   const double hull_area = cv::contourArea(hull);
-  f.solidity = hull_area > 0.0 ? cv::contourArea(contour) / hull_area : 0.0;
-  if (hull_indices.size() > 3) {
-    std::vector<cv::Vec4i> defects;
-    std::sort(hull_indices.begin(), hull_indices.end());
-    cv::convexityDefects(contour, hull_indices, defects);
-    for (const auto& d : defects) {
-      f.max_defect_depth_mm = std::max(f.max_defect_depth_mm, d[3] / 256.0 * work_mm_per_px);
-    }
-  }
+  f.solidity = hull_area > 0.0 ? std::abs(ms.m00) / hull_area : 0.0;
+  f.max_defect_depth_mm = deepest_defect(arc.contour, hull_indices);
   const double area_margin =
       std::min((f.area_mm2 - params_.min_single_area_mm2) / (0.1 * params_.min_single_area_mm2),
                (params_.max_single_area_mm2 - f.area_mm2) / (0.1 * params_.max_single_area_mm2));
@@ -489,15 +642,21 @@ BlobResult FilletEstimator::measure_blob(const std::vector<cv::Point>& contour) 
   e.y_mm = static_cast<float>(cy);
   e.singulated = singulated;
   if (singulated) {
+    // The pose in the straightened frame, then laid back on the arc: the heading there is the
+    // straight heading turned by the arc up to that point.
     const double bulge_sign = bulge_left ? 1.0 : -1.0;
-    const double corrected = theta + bulge_sign * params_.axis_bias_rad;
-    e.angle_rad = wrap_angle(corrected);
+    const double corrected = shape.axis_rad + bulge_sign * params_.axis_bias_rad;
     // From the silhouette's area centroid to the fillet's volume centroid (shape model).
     const double c = std::cos(corrected), s = std::sin(corrected);
     const double offset_along = params_.pose_offset_along_mm;
     const double toward_bulge = bulge_sign * params_.pose_offset_toward_bulge_mm;
-    e.x_mm = static_cast<float>(cx + c * offset_along - s * toward_bulge);
-    e.y_mm = static_cast<float>(cy + s * offset_along + c * toward_bulge);
+    const cv::Point2d pose_straight(ms.m10 / ms.m00 + c * offset_along - s * toward_bulge,
+                                    ms.m01 / ms.m00 + s * offset_along + c * toward_bulge);
+    const cv::Point2d pose =
+        from_axis_frame(lay_on_arc(pose_straight, arc.curvature_per_mm), arc.origin, arc.axis_rad);
+    e.angle_rad = wrap_angle(arc.axis_rad + corrected + arc.curvature_per_mm * pose_straight.x);
+    e.x_mm = static_cast<float>(pose.x);
+    e.y_mm = static_cast<float>(pose.y);
     e.side = bone_up ? SideUp::kBone : SideUp::kSkin;
     e.hand = (bulge_left != bone_up) ? Hand::kLeft : Hand::kRight;
     e.confidence = static_cast<float>(std::min(
@@ -505,7 +664,7 @@ BlobResult FilletEstimator::measure_blob(const std::vector<cv::Point>& contour) 
          clamp01(std::abs(across) / params_.sure_bulge_skewness),
          clamp01(std::abs(f.side_score) / params_.sure_side_score), clamp01(singulation_margin)}));
   } else {
-    e.angle_rad = wrap_angle(theta);
+    e.angle_rad = wrap_angle(raw.axis_rad);
     e.confidence = static_cast<float>(clamp01(-singulation_margin));
   }
   blob.status = BlobStatus::kFillet;

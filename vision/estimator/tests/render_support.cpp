@@ -42,6 +42,17 @@ render::ImagingConditions realistic_imaging(cv::RNG& rng) {
   return imaging;
 }
 
+double dem_line_bend_per_mm(cv::RNG& rng) {
+  // Log-normal magnitude through the DEM line's median (2.0 / m) and 90th percentile (6.7 / m):
+  // log-sigma ln(6.7 / 2.0) / 1.2816 = 0.94, capped at the line's largest flat bend, either way.
+  constexpr double kMedianPerMm = 2.0e-3;
+  constexpr double kLogSigma = 0.94;
+  constexpr double kLargestPerMm = 12.0e-3;
+  const double magnitude =
+      std::min(kLargestPerMm, kMedianPerMm * std::exp(kLogSigma * rng.gaussian(1.0)));
+  return rng.uniform(0, 2) == 0 ? magnitude : -magnitude;
+}
+
 render::Scene random_scene(const render::RenderCamera& camera, std::uint64_t seed,
                            const RandomSceneOptions& options) {
   cv::RNG rng(seed * 2654435761ULL + 12345ULL);
@@ -57,6 +68,7 @@ render::Scene random_scene(const render::RenderCamera& camera, std::uint64_t see
     fillet.hand = rng.uniform(0, 2) == 0 ? Hand::kLeft : Hand::kRight;
     fillet.side = rng.uniform(0, 2) == 0 ? SideUp::kSkin : SideUp::kBone;
     fillet.angle_rad = rng.uniform(-std::numbers::pi, std::numbers::pi);
+    if (options.bent) fillet.bend_per_mm = dem_line_bend_per_mm(rng);
     return fillet;
   };
   const cv::Point2d corner = render::pixel_to_belt(camera, {0.0, 0.0});

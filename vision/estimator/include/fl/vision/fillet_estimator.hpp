@@ -18,6 +18,13 @@
 //    image border are reported as cut (no pose).
 // 6. Geometry in belt millimetres: the contour is mapped through the calibration and its
 //    polygon moments give area, centroid and the principal axis (exact under perspective).
+// 6b. Bend: a limp fillet lies bent in the belt plane (the DEM twin's line bends them by 2 / m
+//    in the median and up to 12 / m on the multilane). Its outline's midline is fitted over
+//    slices along the axis as a + b u + k u^2 / 2 + beta w(u) / 2: the section centre sits a
+//    share beta of the half-width w / 2 towards the bulging edge, and a bend adds the same
+//    parabola to both edges while keeping the width. The outline is straightened along that
+//    arc (repeated on the straightened outline) and items 7 to 11 read the straight shape;
+//    the pose found there is laid back on the arc.
 // 7. Thick end: the third moment along the principal axis. The tip tapers to a long point and
 //    the thick end is blunt, so the area has its long tail towards the tip (skewness > 0
 //    towards the tip). Direction = sign of the skewness.
@@ -76,6 +83,14 @@ struct EstimatorParams {
   double axis_bias_rad = 0.0405;
   double pose_offset_along_mm = -5.6;
   double pose_offset_toward_bulge_mm = 0.74;
+  // Bend fit (item 6b): slices along the axis of this length (at least 2.5 working pixels),
+  // only slices at least this wide (two edges, not a rounded end), this many fits, each on
+  // the outline straightened by the one before, and the largest bend believed (a tighter one
+  // is a folded or doubled fillet, not a bent one).
+  double bend_slice_mm = 2.0;
+  double bend_min_slice_width_mm = 6.0;
+  int bend_fit_passes = 3;
+  double max_bend_per_mm = 1.0 / 40.0;
   double sure_thick_end_skewness = 0.10;  // |skewness| at which the thick end counts as sure
   double sure_bulge_skewness = 0.08;
   // Texture band-pass, in belt millimetres so that every camera resolution measures the same
@@ -125,6 +140,7 @@ struct BlobFeatures {
   double area_mm2 = 0.0;
   double solidity = 0.0;
   double max_defect_depth_mm = 0.0;
+  double bend_per_mm = 0.0;     // fitted in-plane bend (item 6b), + = anticlockwise to the tip
   double axis_skewness = 0.0;   // along the principal axis, oriented thick -> tip: > 0
   double bulge_skewness = 0.0;  // across it, + = bulge on the left of thick -> tip
   double redness = 0.0;
