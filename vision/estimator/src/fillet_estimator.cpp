@@ -265,6 +265,19 @@ FilletEstimator::FilletEstimator(BeltCalibration calibration, EstimatorParams pa
                                 std::to_string(params_.texture_mm_per_px) +
                                 ") must be a positive pixel size");
   }
+  // The bend fit (item 6b): slices of some length, a width that leaves the rounded ends out,
+  // and a largest bend whose arc keeps a fillet's half width (36 mm) off its centre.
+  if (!(params_.bend_slice_mm > 0.0) || !(params_.bend_slice_mm < 50.0) ||
+      !(params_.bend_min_slice_width_mm >= 0.0) || !(params_.bend_min_slice_width_mm < 100.0) ||
+      !(params_.max_bend_per_mm >= 0.0) || !(params_.max_bend_per_mm < 1.0 / 36.0) ||
+      params_.bend_fit_passes < 0 || params_.bend_fit_passes > 10) {
+    throw std::invalid_argument(
+        "FilletEstimator: the bend fit needs 0 < bend_slice_mm (" +
+        std::to_string(params_.bend_slice_mm) + ") < 50, 0 <= bend_min_slice_width_mm (" +
+        std::to_string(params_.bend_min_slice_width_mm) + ") < 100, 0 <= max_bend_per_mm (" +
+        std::to_string(params_.max_bend_per_mm) + ") < 1/36 and 0 <= bend_fit_passes (" +
+        std::to_string(params_.bend_fit_passes) + ") <= 10");
+  }
   texture_downscale_ =
       std::max(1, static_cast<int>(std::lround(params_.texture_mm_per_px / work_mm_per_px)));
   const double texture_px_mm = work_mm_per_px * texture_downscale_;

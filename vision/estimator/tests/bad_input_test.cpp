@@ -135,5 +135,25 @@ TEST(BadInput, EmptyOrInvertedTextureBandIsRejected) {
   EXPECT_THROW((FilletEstimator{calibration, params}), std::invalid_argument);
 }
 
+// The bend fit's settings (item 6b) out of range are refused when the estimator is built, not
+// met as a crash or a silent wrong straightening in the first frame.
+TEST(BadInput, BendFitSettingsOutOfRangeAreRejected) {
+  const BeltCalibration calibration = exact_calibration(camera_640());
+  const auto refused = [&](auto change) {
+    EstimatorParams params;
+    change(params);
+    EXPECT_THROW((FilletEstimator{calibration, params}), std::invalid_argument);
+  };
+  refused([](EstimatorParams& p) { p.bend_slice_mm = 0.0; });  // no slices
+  refused([](EstimatorParams& p) { p.bend_slice_mm = std::numeric_limits<double>::quiet_NaN(); });
+  refused([](EstimatorParams& p) { p.bend_min_slice_width_mm = -1.0; });
+  refused([](EstimatorParams& p) { p.bend_fit_passes = -1; });
+  // A 36 mm radius puts a 72 mm wide fillet's inner edge on the arc's centre.
+  refused([](EstimatorParams& p) { p.max_bend_per_mm = 1.0 / 30.0; });
+  EstimatorParams unbent;
+  unbent.bend_fit_passes = 0;  // the fit off: the outline is read as it lies
+  EXPECT_NO_THROW((FilletEstimator{calibration, unbent}));
+}
+
 }  // namespace
 }  // namespace fl::vision

@@ -360,6 +360,9 @@ void set_estimator_param(EstimatorParams& params, std::string_view assignment) {
       {"axis_bias_rad", &EstimatorParams::axis_bias_rad},
       {"pose_offset_along_mm", &EstimatorParams::pose_offset_along_mm},
       {"pose_offset_toward_bulge_mm", &EstimatorParams::pose_offset_toward_bulge_mm},
+      {"bend_slice_mm", &EstimatorParams::bend_slice_mm},
+      {"bend_min_slice_width_mm", &EstimatorParams::bend_min_slice_width_mm},
+      {"max_bend_per_mm", &EstimatorParams::max_bend_per_mm},
       {"sure_thick_end_skewness", &EstimatorParams::sure_thick_end_skewness},
       {"sure_bulge_skewness", &EstimatorParams::sure_bulge_skewness},
       {"redness_mid", &EstimatorParams::redness_mid},
@@ -388,9 +391,17 @@ void set_estimator_param(EstimatorParams& params, std::string_view assignment) {
     params.border_margin_px = static_cast<int>(value);
     return;
   }
+  if (name == "bend_fit_passes") {
+    if (value != std::floor(value) || value < 0.0 || value > 10.0) {
+      throw std::invalid_argument("--set " + std::string(assignment) +
+                                  ": bend_fit_passes takes a whole number 0..10");
+    }
+    params.bend_fit_passes = static_cast<int>(value);
+    return;
+  }
   const auto member = kDoubles.find(name);
   if (member == kDoubles.end()) {
-    std::string known = "border_margin_px";
+    std::string known = "border_margin_px, bend_fit_passes";
     for (const auto& [known_name, pointer] : kDoubles) known += ", " + known_name;
     throw std::invalid_argument("--set " + std::string(assignment) + ": unknown parameter '" +
                                 name + "' (known: " + known + ")");

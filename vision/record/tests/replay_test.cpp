@@ -202,6 +202,13 @@ TEST(Replay, EstimatorSettingsAreChecked) {
   EXPECT_THROW(set_estimator_param(params, "no_such_param=1"), std::invalid_argument);
   EXPECT_THROW(set_estimator_param(params, "min_solidity=abc"), std::invalid_argument);
   EXPECT_THROW(set_estimator_param(params, "min_solidity=nan"), std::invalid_argument);
+  // The bend fit (fillet_estimator.hpp, item 6b): its pass count is a whole number.
+  set_estimator_param(params, "bend_fit_passes=0");
+  EXPECT_EQ(params.bend_fit_passes, 0);
+  set_estimator_param(params, "max_bend_per_mm=0.01");
+  EXPECT_EQ(params.max_bend_per_mm, 0.01);
+  EXPECT_THROW(set_estimator_param(params, "bend_fit_passes=1.5"), std::invalid_argument);
+  EXPECT_THROW(set_estimator_param(params, "bend_fit_passes=11"), std::invalid_argument);
 }
 
 }  // namespace
