@@ -101,15 +101,17 @@ struct AxisArc {
 // a bend in the belt plane adds k u^2 / 2 to both edges and keeps the width. Least squares of
 // the midline over slices along the axis gives k, beta and the axis (a, b); the outline is
 // straightened with k and the fit repeated on it, as the first axis is the bent shape's.
+// `passes` fits in all; with none the outline is only turned into the principal axis' frame.
 AxisArc fit_axis_arc(const std::vector<cv::Point2f>& contour_mm, cv::Point2d centroid,
-                     double principal_rad, const EstimatorParams& params, double mm_per_px) {
+                     double principal_rad, int passes, const EstimatorParams& params,
+                     double mm_per_px) {
   AxisArc arc;
   arc.origin = centroid;
   arc.axis_rad = principal_rad;
   arc.contour.resize(contour_mm.size());
   const double slice_mm = std::max(params.bend_slice_mm, 2.5 * mm_per_px);
   std::vector<double> high, low;
-  for (int pass = 0; pass <= params.bend_fit_passes; ++pass) {
+  for (int pass = 0; pass <= passes; ++pass) {
     double min_u = 1e300, max_u = -1e300;
     for (std::size_t i = 0; i < contour_mm.size(); ++i) {
       arc.contour[i] = straighten(
@@ -118,7 +120,7 @@ AxisArc fit_axis_arc(const std::vector<cv::Point2f>& contour_mm, cv::Point2d cen
       min_u = std::min(min_u, arc.contour[i].x);
       max_u = std::max(max_u, arc.contour[i].x);
     }
-    if (pass == params.bend_fit_passes || params.bend_fit_passes == 0) break;
+    if (pass == passes) break;
     const auto slices = static_cast<std::size_t>(std::ceil((max_u - min_u) / slice_mm)) + 1;
     high.assign(slices, -1e300);
     low.assign(slices, 1e300);
@@ -545,24 +547,21 @@ BlobResult FilletEstimator::measure_blob(const std::vector<cv::Point>& contour) 
 
   // The outline straightened along its fitted arc (item 6b): a limp fillet lies bent, and the
   // thick end, the bulge, the singulation and the pose are read on its straight shape.
-  AxisArc arc = fit_axis_arc(contour_mm, {cx, cy}, raw.axis_rad, params_, work_mm_per_px);
+  AxisArc arc = fit_axis_arc(contour_mm, {cx, cy}, raw.axis_rad, params_.bend_fit_passes, params_,
+                             work_mm_per_px);
   std::vector<cv::Point2f> straight(arc.contour.begin(), arc.contour.end());
   cv::Moments ms = cv::moments(straight);
   if (!(std::abs(std::abs(ms.m00) - f.area_mm2) <= 0.05 * f.area_mm2)) {
     // A fit that folds the outline over itself (not a single bent fillet): read it unbent.
-    EstimatorParams unbent = params_;
-    unbent.bend_fit_passes = 0;
-    arc = fit_axis_arc(contour_mm, {cx, cy}, raw.axis_rad, unbent, work_mm_per_px);
+    arc = fit_axis_arc(contour_mm, {cx, cy}, raw.axis_rad, 0, params_, work_mm_per_px);
     straight.assign(arc.contour.begin(), arc.contour.end());
     ms = cv::moments(straight);
   }
   f.bend_per_mm = arc.curvature_per_mm;
   const Shape shape = shape_of(ms);
-  const double along = shape.along;
-  const double across = shape.across;
-  f.axis_skewness = along;
-  f.bulge_skewness = across;
-  const bool bulge_left = across > 0.0;
+  f.axis_skewness = shape.along;
+  f.bulge_skewness = shape.across;
+  const bool bulge_left = shape.across > 0.0;
 
   // Singulation, on the straightened outline: a bent single is as convex as a straight one.
   std::vector<int> hull_indices;
@@ -673,8 +672,8 @@ BlobResult FilletEstimator::measure_blob(const std::vector<cv::Point>& contour) 
     e.side = bone_up ? SideUp::kBone : SideUp::kSkin;
     e.hand = (bulge_left != bone_up) ? Hand::kLeft : Hand::kRight;
     e.confidence = static_cast<float>(std::min(
-        {clamp01(along / params_.sure_thick_end_skewness),
-         clamp01(std::abs(across) / params_.sure_bulge_skewness),
+        {clamp01(shape.along / params_.sure_thick_end_skewness),
+         clamp01(std::abs(shape.across) / params_.sure_bulge_skewness),
          clamp01(std::abs(f.side_score) / params_.sure_side_score), clamp01(singulation_margin)}));
   } else {
     e.angle_rad = wrap_angle(raw.axis_rad);

@@ -376,6 +376,11 @@ void set_estimator_param(EstimatorParams& params, std::string_view assignment) {
       {"w_texture", &EstimatorParams::w_texture},
       {"sure_side_score", &EstimatorParams::sure_side_score},
   };
+  // Whole-number parameters and the largest value each takes.
+  static const std::map<std::string, std::pair<int EstimatorParams::*, int>> kWholes = {
+      {"border_margin_px", {&EstimatorParams::border_margin_px, 100}},
+      {"bend_fit_passes", {&EstimatorParams::bend_fit_passes, 10}},
+  };
   char* end = nullptr;
   const double value = std::strtod(value_text.c_str(), &end);
   if (value_text.empty() || end != value_text.c_str() + value_text.size() ||
@@ -383,26 +388,21 @@ void set_estimator_param(EstimatorParams& params, std::string_view assignment) {
     throw std::invalid_argument("--set " + std::string(assignment) + ": '" + value_text +
                                 "' is not a finite number");
   }
-  if (name == "border_margin_px") {
-    if (value != std::floor(value) || value < 0.0 || value > 100.0) {
-      throw std::invalid_argument("--set " + std::string(assignment) +
-                                  ": border_margin_px takes a whole number 0..100");
+  if (const auto whole = kWholes.find(name); whole != kWholes.end()) {
+    const auto& [member, largest] = whole->second;
+    if (value != std::floor(value) || value < 0.0 || value > largest) {
+      throw std::invalid_argument("--set " + std::string(assignment) + ": " + name +
+                                  " takes a whole number 0.." + std::to_string(largest));
     }
-    params.border_margin_px = static_cast<int>(value);
-    return;
-  }
-  if (name == "bend_fit_passes") {
-    if (value != std::floor(value) || value < 0.0 || value > 10.0) {
-      throw std::invalid_argument("--set " + std::string(assignment) +
-                                  ": bend_fit_passes takes a whole number 0..10");
-    }
-    params.bend_fit_passes = static_cast<int>(value);
+    params.*member = static_cast<int>(value);
     return;
   }
   const auto member = kDoubles.find(name);
   if (member == kDoubles.end()) {
-    std::string known = "border_margin_px, bend_fit_passes";
-    for (const auto& [known_name, pointer] : kDoubles) known += ", " + known_name;
+    std::string known;
+    for (const auto& [known_name, entry] : kWholes) known += known_name + ", ";
+    for (const auto& [known_name, pointer] : kDoubles) known += known_name + ", ";
+    known.resize(known.size() - 2);
     throw std::invalid_argument("--set " + std::string(assignment) + ": unknown parameter '" +
                                 name + "' (known: " + known + ")");
   }
