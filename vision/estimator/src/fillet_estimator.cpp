@@ -6,9 +6,10 @@
 #include <cmath>
 #include <numbers>
 #include <opencv2/calib3d.hpp>
-#include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
+
+#include "working_image.hpp"
 
 namespace fl::vision {
 namespace {
@@ -316,15 +317,22 @@ FrameResult FilletEstimator::estimate(const cv::Mat& bgr, std::int64_t frame_tim
   } else {
     work_bgr_ = bgr;
   }
-
-  // Chroma 128 + (R - B) / 2 and brightness. The chroma is computed in integers, rounded half
-  // to even as cv::transform with a float matrix did (bit-identical, and vectorised),
-  // row by row with the belt count while the row is in cache; the histogram counts in integers
-  // into four tables, so that equal neighbouring pixels do not wait on each other's increment.
-  cv::cvtColor(work_bgr_, grey_, cv::COLOR_BGR2GRAY);
+  // Luma, chroma 128 + (R - B) / 2, the belt count and the histogram in one pass, row by row
+  // from colour planes in cache (working_image.hpp). The histogram counts in integers into
+  // four tables, so that equal neighbouring pixels do not wait on each other's increment.
+  grey_.create(work_bgr_.size(), CV_8UC1);
   chroma_.create(work_bgr_.size(), CV_8UC1);
+  planes_.create(3, work_bgr_.cols, CV_8UC1);
+  std::uint8_t* const blue = planes_.ptr<std::uint8_t>(0);
+  std::uint8_t* const green = planes_.ptr<std::uint8_t>(1);
+  std::uint8_t* const red = planes_.ptr<std::uint8_t>(2);
   std::array<std::array<std::uint32_t, 256>, 4> counts{};
   std::size_t belt_like = 0;
+  // The largest chroma per row and per column: once the threshold is known they bound the
+  // mask, and the segmentation below runs on that box only.
+  row_max_chroma_.assign(static_cast<std::size_t>(work_bgr_.rows), 0);
+  column_max_chroma_.assign(static_cast<std::size_t>(work_bgr_.cols), 0);
+  std::uint8_t* const column_max = column_max_chroma_.data();
   const int belt_low = static_cast<int>(params_.belt_chroma - params_.belt_chroma_tolerance);
   const int belt_high = static_cast<int>(params_.belt_chroma + params_.belt_chroma_tolerance);
   const auto min_brightness = static_cast<int>(params_.min_belt_brightness);
@@ -332,35 +340,17 @@ FrameResult FilletEstimator::estimate(const cv::Mat& bgr, std::int64_t frame_tim
   // loops would be reloaded per pixel and block vectorisation.
   const int cols = chroma_.cols;
   for (int row = 0; row < chroma_.rows; ++row) {
-    const std::uint8_t* bgr_row = work_bgr_.ptr<std::uint8_t>(row);
-    const std::uint8_t* g = grey_.ptr<std::uint8_t>(row);
+    detail::split_bgr_row(work_bgr_.ptr<std::uint8_t>(row), cols, blue, green, red);
+    std::uint8_t* g = grey_.ptr<std::uint8_t>(row);
     std::uint8_t* c = chroma_.ptr<std::uint8_t>(row);
-    int first_scalar = 0;
-#if CV_SIMD128
-    // GCC leaves the 3-channel loop scalar; 16 pixels at a time, same arithmetic in int16 and
-    // the same saturation (v_pack_u) to 255.
-    const cv::v_int16x8 bias = cv::v_setall_s16(256), one = cv::v_setall_s16(1);
-    const auto half_to_even = [&](const cv::v_uint16x8& red, const cv::v_uint16x8& blue) {
-      const cv::v_int16x8 twice =
-          cv::v_reinterpret_as_s16(red) - cv::v_reinterpret_as_s16(blue) + bias;
-      return (twice + ((twice >> 1) & one)) >> 1;
-    };
-    for (; first_scalar + 16 <= cols; first_scalar += 16) {
-      cv::v_uint8x16 blue, green, red;
-      cv::v_load_deinterleave(bgr_row + 3 * first_scalar, blue, green, red);
-      cv::v_uint16x8 blue_low, blue_high, red_low, red_high;
-      cv::v_expand(blue, blue_low, blue_high);
-      cv::v_expand(red, red_low, red_high);
-      cv::v_store(c + first_scalar,
-                  cv::v_pack_u(half_to_even(red_low, blue_low), half_to_even(red_high, blue_high)));
+    detail::grey_row(blue, green, red, cols, g);
+    detail::chroma_row(blue, red, cols, c);
+    std::uint8_t row_max = 0;
+    for (int col = 0; col < cols; ++col) {
+      row_max = std::max(row_max, c[col]);
+      column_max[col] = std::max(column_max[col], c[col]);
     }
-#endif
-    for (int col = first_scalar; col < cols; ++col) {
-      // twice_chroma = 256 + R - B in 1..511; half of it, ties to the even neighbour.
-      const int twice_chroma = 256 + bgr_row[3 * col + 2] - bgr_row[3 * col];
-      const int chroma = (twice_chroma + ((twice_chroma >> 1) & 1)) >> 1;
-      c[col] = static_cast<std::uint8_t>(chroma > 255 ? 255 : chroma);
-    }
+    row_max_chroma_[static_cast<std::size_t>(row)] = row_max;
     std::uint32_t belt_in_row = 0;
     for (int col = 0; col < cols; ++col) {
       belt_in_row += static_cast<std::uint32_t>((c[col] >= belt_low) & (c[col] <= belt_high) &
@@ -393,25 +383,12 @@ FrameResult FilletEstimator::estimate(const cv::Mat& bgr, std::int64_t frame_tim
   const Otsu split = otsu(histogram);
   if (split.high_mean - split.low_mean < params_.min_meat_contrast) return result;  // empty belt
 
-  cv::threshold(chroma_, mask_, split.threshold, 255, cv::THRESH_BINARY);
-  static const cv::Mat kOpen = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(3, 3));
-  static const cv::Mat kClose = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5));
-  cv::morphologyEx(mask_, mask_, cv::MORPH_OPEN, kOpen);
-  // Closing only adds pixels within its radius of the foreground, and reads 2 radii around
-  // them: on the foreground's box grown by twice the radius the result is the full frame's,
-  // at a fraction of the cost for a belt with one or two fillets.
-  const cv::Rect opened = cv::boundingRect(mask_);
-  if (!opened.empty()) {
-    const int reach_px = kClose.cols - 1;  // twice the radius
-    const cv::Rect roi = cv::Rect(opened.x - reach_px, opened.y - reach_px,
-                                  opened.width + 2 * reach_px, opened.height + 2 * reach_px) &
-                         cv::Rect(0, 0, mask_.cols, mask_.rows);
-    cv::morphologyEx(mask_(roi), scratch_, cv::MORPH_CLOSE, kClose);
-    scratch_.copyTo(mask_(roi));
-  }
-
+  // Threshold, opening, closing and contours on the box of the pixels above the threshold
+  // only (the same result as on the whole frame, at a fraction of its cost).
   std::vector<std::vector<cv::Point>> contours;
-  cv::findContours(mask_, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  detail::segment_meat(chroma_, split.threshold,
+                       detail::box_above(row_max_chroma_, column_max_chroma_, split.threshold),
+                       mask_, scratch_, contours);
   const double work_mm_per_px = calibration_.mm_per_px_at_centre() * downscale_;
   const double min_area_px = params_.min_blob_area_mm2 / (work_mm_per_px * work_mm_per_px);
   const int margin = params_.border_margin_px;

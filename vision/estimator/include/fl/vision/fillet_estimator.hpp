@@ -205,6 +205,9 @@ class FilletEstimator {
   cv::Mat work_bgr_;
   cv::Mat chroma_;
   cv::Mat grey_;
+  cv::Mat planes_;  // one working row as blue, green and red planes
+  std::vector<std::uint8_t> row_max_chroma_;
+  std::vector<std::uint8_t> column_max_chroma_;
   cv::Mat mask_;
   cv::Mat scratch_;
   cv::Mat labels_;

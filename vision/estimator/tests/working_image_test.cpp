@@ -1,0 +1,184 @@
+// The working image's row kernels against the OpenCV calls they replace: the estimator's
+// results may only stay the same if every pixel does.
+#include "working_image.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+namespace {
+
+using fl::vision::detail::box_above;
+using fl::vision::detail::chroma_row;
+using fl::vision::detail::grey_row;
+using fl::vision::detail::segment_meat;
+using fl::vision::detail::split_bgr_row;
+
+// The kernels take 16 pixels at a time and finish with a scalar tail; a segment of this many
+// pixels runs on the tail alone.
+constexpr int kTailOnlyPixels = 15;
+
+// Runs a row kernel over `cols` pixels in segments of kTailOnlyPixels, so the scalar code does
+// every pixel.
+template <typename Kernel>
+void in_tail_segments(int cols, Kernel kernel) {
+  for (int first = 0; first < cols; first += kTailOnlyPixels) {
+    kernel(first, std::min(kTailOnlyPixels, cols - first));
+  }
+}
+
+TEST(WorkingImage, SplitGivesTheChannelsAsPlanes) {
+  cv::RNG rng(8);
+  cv::Mat frame(1, 640 + 7, CV_8UC3);  // 40 blocks of 16 and a tail of 7
+  rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
+  cv::Mat planes(3, frame.cols, CV_8UC1);
+  split_bgr_row(frame.ptr<std::uint8_t>(0), frame.cols, planes.ptr<std::uint8_t>(0),
+                planes.ptr<std::uint8_t>(1), planes.ptr<std::uint8_t>(2));
+  std::vector<cv::Mat> expected;
+  cv::split(frame, expected);
+  for (int channel = 0; channel < 3; ++channel) {
+    EXPECT_EQ(
+        cv::norm(expected[static_cast<std::size_t>(channel)], planes.row(channel), cv::NORM_INF),
+        0.0)
+        << "channel " << channel;
+  }
+}
+
+TEST(WorkingImage, GreyIsCvtColorForEveryColour) {
+  // All 2^24 colours, one blue-green plane per red value.
+  cv::Mat colours(256, 256 * 256, CV_8UC3);
+  for (int red = 0; red < 256; ++red) {
+    auto* pixel = colours.ptr<std::uint8_t>(red);
+    for (int green = 0; green < 256; ++green) {
+      for (int blue = 0; blue < 256; ++blue, pixel += 3) {
+        pixel[0] = static_cast<std::uint8_t>(blue);
+        pixel[1] = static_cast<std::uint8_t>(green);
+        pixel[2] = static_cast<std::uint8_t>(red);
+      }
+    }
+  }
+  cv::Mat expected;
+  cv::cvtColor(colours, expected, cv::COLOR_BGR2GRAY);
+  const int cols = colours.cols;
+  cv::Mat planes(3, cols, CV_8UC1), vector_grey(1, cols, CV_8UC1), scalar_grey(1, cols, CV_8UC1);
+  int mismatches = 0;
+  for (int row = 0; row < colours.rows; ++row) {
+    split_bgr_row(colours.ptr<std::uint8_t>(row), cols, planes.ptr<std::uint8_t>(0),
+                  planes.ptr<std::uint8_t>(1), planes.ptr<std::uint8_t>(2));
+    const std::uint8_t* blue = planes.ptr<std::uint8_t>(0);
+    const std::uint8_t* green = planes.ptr<std::uint8_t>(1);
+    const std::uint8_t* red = planes.ptr<std::uint8_t>(2);
+    grey_row(blue, green, red, cols, vector_grey.ptr<std::uint8_t>(0));
+    in_tail_segments(cols, [&](int first, int count) {
+      grey_row(blue + first, green + first, red + first, count,
+               scalar_grey.ptr<std::uint8_t>(0) + first);
+    });
+    mismatches += cv::countNonZero(vector_grey != expected.row(row));
+    mismatches += cv::countNonZero(scalar_grey != expected.row(row));
+  }
+  EXPECT_EQ(mismatches, 0);
+}
+
+TEST(WorkingImage, ChromaIsCvTransformForEveryRedBluePair) {
+  // Blue along the columns, red down the rows; green must not matter.
+  cv::Mat colours(256, 256, CV_8UC3);
+  cv::RNG rng(9);
+  for (int red = 0; red < 256; ++red) {
+    for (int blue = 0; blue < 256; ++blue) {
+      colours.at<cv::Vec3b>(red, blue) =
+          cv::Vec3b(static_cast<std::uint8_t>(blue), static_cast<std::uint8_t>(rng.uniform(0, 256)),
+                    static_cast<std::uint8_t>(red));
+    }
+  }
+  cv::Mat expected;
+  cv::transform(colours, expected, cv::Matx14f(-0.5F, 0.0F, 0.5F, 128.0F));
+  cv::Mat planes(3, 256, CV_8UC1), vector_chroma(1, 256, CV_8UC1), scalar_chroma(1, 256, CV_8UC1);
+  int mismatches = 0;
+  for (int row = 0; row < 256; ++row) {
+    split_bgr_row(colours.ptr<std::uint8_t>(row), 256, planes.ptr<std::uint8_t>(0),
+                  planes.ptr<std::uint8_t>(1), planes.ptr<std::uint8_t>(2));
+    const std::uint8_t* blue = planes.ptr<std::uint8_t>(0);
+    const std::uint8_t* red = planes.ptr<std::uint8_t>(2);
+    chroma_row(blue, red, 256, vector_chroma.ptr<std::uint8_t>(0));
+    in_tail_segments(256, [&](int first, int count) {
+      chroma_row(blue + first, red + first, count, scalar_chroma.ptr<std::uint8_t>(0) + first);
+    });
+    mismatches += cv::countNonZero(vector_chroma != expected.row(row));
+    mismatches += cv::countNonZero(scalar_chroma != expected.row(row));
+  }
+  EXPECT_EQ(mismatches, 0);
+}
+
+// The reference: the same operators on the whole frame.
+void segment_whole_frame(const cv::Mat& chroma, int threshold, cv::Mat& mask,
+                         std::vector<std::vector<cv::Point>>& contours) {
+  cv::threshold(chroma, mask, threshold, 255, cv::THRESH_BINARY);
+  cv::morphologyEx(mask, mask, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(3, 3)));
+  cv::morphologyEx(mask, mask, cv::MORPH_CLOSE,
+                   cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5)));
+  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+}
+
+// The box_above of an image, from its row and column maxima.
+cv::Rect box_above_of(const cv::Mat& chroma, int threshold) {
+  std::vector<std::uint8_t> row_max(static_cast<std::size_t>(chroma.rows), 0);
+  std::vector<std::uint8_t> column_max(static_cast<std::size_t>(chroma.cols), 0);
+  for (int row = 0; row < chroma.rows; ++row) {
+    for (int col = 0; col < chroma.cols; ++col) {
+      const std::uint8_t value = chroma.at<std::uint8_t>(row, col);
+      row_max[static_cast<std::size_t>(row)] =
+          std::max(row_max[static_cast<std::size_t>(row)], value);
+      column_max[static_cast<std::size_t>(col)] =
+          std::max(column_max[static_cast<std::size_t>(col)], value);
+    }
+  }
+  return box_above(row_max, column_max, threshold);
+}
+
+TEST(WorkingImage, BoxAboveBoundsThePixelsOverTheThreshold) {
+  cv::Mat chroma(48, 64, CV_8UC1, cv::Scalar(120));
+  EXPECT_TRUE(box_above_of(chroma, 120).empty()) << "equal to the threshold is not above it";
+  chroma.at<std::uint8_t>(5, 60) = 121;
+  chroma.at<std::uint8_t>(40, 3) = 200;
+  EXPECT_EQ(box_above_of(chroma, 120), cv::Rect(3, 5, 58, 36));
+  EXPECT_EQ(box_above_of(chroma, 121), cv::Rect(3, 40, 1, 1));
+}
+
+// Meat blobs anywhere, cut by every edge and corner, with specks the opening removes and
+// cracks the closing fills: the mask and every contour point equal the whole frame's.
+TEST(WorkingImage, SegmentationOnTheMeatBoxIsTheWholeFrames) {
+  constexpr int kThreshold = 140;  // between the belt (100..130) and the meat (150..200)
+  cv::RNG rng(11);
+  cv::Mat mask, scratch, reference_mask;
+  std::vector<std::vector<cv::Point>> contours, reference_contours;
+  for (int scene = 0; scene < 200; ++scene) {
+    cv::Mat chroma(120, 160, CV_8UC1);
+    rng.fill(chroma, cv::RNG::UNIFORM, 100, 131);
+    const int blobs = scene % 4;  // none, one, two or three
+    for (int blob = 0; blob < blobs; ++blob) {
+      // Centres up to 15 px beyond the frame, so that blobs are cut by edges and corners.
+      const cv::Point centre(rng.uniform(-15, chroma.cols + 15),
+                             rng.uniform(-15, chroma.rows + 15));
+      const cv::Size axes(rng.uniform(4, 40), rng.uniform(3, 20));
+      cv::ellipse(chroma, centre, axes, rng.uniform(0.0, 180.0), 0, 360,
+                  cv::Scalar(rng.uniform(150, 201)), cv::FILLED);
+      // A crack of belt colour through the blob, one pixel wide.
+      cv::line(chroma, centre - cv::Point(axes.width, 0), centre + cv::Point(axes.width, 0),
+               cv::Scalar(120), 1);
+    }
+    for (int speck = 0; speck < 6; ++speck) {
+      chroma.at<std::uint8_t>(rng.uniform(0, chroma.rows), rng.uniform(0, chroma.cols)) = 190;
+    }
+    segment_meat(chroma, kThreshold, box_above_of(chroma, kThreshold), mask, scratch, contours);
+    segment_whole_frame(chroma, kThreshold, reference_mask, reference_contours);
+    ASSERT_EQ(cv::countNonZero(mask != reference_mask), 0) << "scene " << scene;
+    ASSERT_EQ(contours, reference_contours) << "scene " << scene;
+  }
+}
+
+}  // namespace
