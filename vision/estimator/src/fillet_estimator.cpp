@@ -251,6 +251,7 @@ FilletEstimator::FilletEstimator(BeltCalibration calibration, EstimatorParams pa
   const int erode_px = std::max(1, static_cast<int>(std::lround(3.0 / work_mm_per_px)));
   interior_erosion_ =
       cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * erode_px + 1, 2 * erode_px + 1));
+  interior_erosion_runs_ = detail::centred_run_half_widths(interior_erosion_);
   gap_radius_px_ =
       std::max(1, static_cast<int>(std::lround(0.5 * params_.min_gap_mm / work_mm_per_px)));
   gap_dilation_ = cv::getStructuringElement(
@@ -564,7 +565,12 @@ BlobResult FilletEstimator::measure_blob(const std::vector<cv::Point>& contour) 
   interior_.setTo(0);
   cv::drawContours(interior_, std::vector<std::vector<cv::Point>>{contour}, 0, cv::Scalar(255),
                    cv::FILLED, cv::LINE_8, cv::noArray(), 0, -box.tl());
-  cv::erode(interior_, eroded_, interior_erosion_);
+  if (interior_erosion_runs_.empty()) {
+    cv::erode(interior_, eroded_, interior_erosion_);
+  } else {
+    detail::erode_by_centred_runs(interior_, interior_erosion_runs_, erosion_padded_,
+                                  erosion_run_minima_, eroded_);
+  }
   // Colour and brightness means over the interior in one pass instead of masked cv::mean
   // calls: integer sums as cv::mean keeps them, and the mean is the sum times 1 / count as
   // there.

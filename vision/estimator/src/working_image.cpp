@@ -4,6 +4,7 @@
 #include "working_image.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 #include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -150,6 +151,66 @@ void segment_meat(const cv::Mat& chroma, int threshold, const cv::Rect& above, c
   // the closing's box, with zeros or the frame's edge around them, are the whole frame's.
   cv::findContours(mask(close_roi), contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE,
                    close_roi.tl());
+}
+
+std::vector<int> centred_run_half_widths(const cv::Mat& element) {
+  if (element.empty() || element.type() != CV_8UC1 || element.rows % 2 == 0 ||
+      element.cols % 2 == 0) {
+    return {};
+  }
+  const int centre = element.cols / 2;
+  std::vector<int> half_widths;
+  for (int row = 0; row < element.rows; ++row) {
+    const auto* pixels = element.ptr<std::uint8_t>(row);
+    int half_width = -1;
+    while (half_width < centre && pixels[centre + half_width + 1] != 0 &&
+           pixels[centre - half_width - 1] != 0) {
+      ++half_width;
+    }
+    // The run must not be empty, and every pixel of the row must be inside it.
+    if (half_width < 0) return {};
+    for (int col = 0; col < element.cols; ++col) {
+      const bool in_run = half_width >= 0 && std::abs(col - centre) <= half_width;
+      if ((pixels[col] != 0) != in_run) return {};
+    }
+    half_widths.push_back(half_width);
+  }
+  return half_widths;
+}
+
+void erode_by_centred_runs(const cv::Mat& src, const std::vector<int>& half_widths, cv::Mat& padded,
+                           cv::Mat& run_minima, cv::Mat& dst) {
+  CV_Assert(src.type() == CV_8UC1 && !half_widths.empty() && half_widths.size() % 2 == 1);
+  const int reach_rows = static_cast<int>(half_widths.size()) / 2;
+  const int reach_cols = *std::max_element(half_widths.begin(), half_widths.end());
+  const int cols = src.cols;
+  // Rows above and below the image are all 255 and change no minimum, so only the columns are
+  // padded.
+  padded.create(src.rows, cols + 2 * reach_cols, CV_8UC1);
+  padded.setTo(255);
+  src.copyTo(padded(cv::Rect(reach_cols, 0, cols, src.rows)));
+  run_minima.create(reach_cols + 1, cols, CV_8UC1);  // one image row's, per half width
+  dst.create(src.size(), CV_8UC1);
+  dst.setTo(255);
+  for (int row = 0; row < src.rows; ++row) {
+    const std::uint8_t* in = padded.ptr<std::uint8_t>(row) + reach_cols;
+    std::copy(in, in + cols, run_minima.ptr<std::uint8_t>(0));
+    for (int k = 1; k <= reach_cols; ++k) {
+      const std::uint8_t* narrower = run_minima.ptr<std::uint8_t>(k - 1);
+      std::uint8_t* wider = run_minima.ptr<std::uint8_t>(k);
+      for (int col = 0; col < cols; ++col) {
+        wider[col] = std::min(narrower[col], std::min(in[col - k], in[col + k]));
+      }
+    }
+    // This image row is element row e of output row (row + reach_rows - e).
+    for (std::size_t element_row = 0; element_row < half_widths.size(); ++element_row) {
+      const int out_row = row + reach_rows - static_cast<int>(element_row);
+      if (out_row < 0 || out_row >= src.rows) continue;
+      std::uint8_t* out = dst.ptr<std::uint8_t>(out_row);
+      const std::uint8_t* minima = run_minima.ptr<std::uint8_t>(half_widths[element_row]);
+      for (int col = 0; col < cols; ++col) out[col] = std::min(out[col], minima[col]);
+    }
+  }
 }
 
 }  // namespace fl::vision::detail

@@ -13,7 +13,9 @@
 namespace {
 
 using fl::vision::detail::box_above;
+using fl::vision::detail::centred_run_half_widths;
 using fl::vision::detail::chroma_row;
+using fl::vision::detail::erode_by_centred_runs;
 using fl::vision::detail::grey_row;
 using fl::vision::detail::segment_meat;
 using fl::vision::detail::split_bgr_row;
@@ -178,6 +180,53 @@ TEST(WorkingImage, SegmentationOnTheMeatBoxIsTheWholeFrames) {
     segment_whole_frame(chroma, kThreshold, reference_mask, reference_contours);
     ASSERT_EQ(cv::countNonZero(mask != reference_mask), 0) << "scene " << scene;
     ASSERT_EQ(contours, reference_contours) << "scene " << scene;
+  }
+}
+
+// Blob interiors of every size the estimator erodes by (3 mm at 0.23 to 0.94 mm per working
+// pixel: ellipses of 7 to 27 pixels), plus a rectangle and a cross, on masks cut by the box's
+// edges and on noise: every pixel equals cv::erode's.
+TEST(WorkingImage, CentredRunErosionIsCvErode) {
+  std::vector<cv::Mat> elements;
+  for (const int size : {1, 3, 5, 7, 9, 13, 15, 27}) {
+    elements.push_back(cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(size, size)));
+  }
+  elements.push_back(cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(9, 5)));
+  elements.push_back(cv::getStructuringElement(cv::MORPH_RECT, cv::Size(5, 3)));
+  elements.push_back(cv::getStructuringElement(cv::MORPH_CROSS, cv::Size(7, 7)));
+  cv::RNG rng(12);
+  cv::Mat eroded, expected, padded, run_minima;
+  for (const cv::Mat& element : elements) {
+    const std::vector<int> half_widths = centred_run_half_widths(element);
+    ASSERT_EQ(half_widths.size(), static_cast<std::size_t>(element.rows)) << element;
+    for (int trial = 0; trial < 20; ++trial) {
+      cv::Mat mask(rng.uniform(1, 90), rng.uniform(1, 200), CV_8UC1, cv::Scalar(0));
+      if (trial % 4 == 3) {
+        rng.fill(mask, cv::RNG::UNIFORM, 0, 256);  // any values, not only 0 and 255
+      } else {
+        cv::ellipse(mask, cv::Point(mask.cols / 2, mask.rows / 2),
+                    cv::Size(mask.cols / 2 + rng.uniform(0, 4), mask.rows / 2 + rng.uniform(0, 4)),
+                    rng.uniform(0.0, 180.0), 0, 360, cv::Scalar(255), cv::FILLED);
+      }
+      erode_by_centred_runs(mask, half_widths, padded, run_minima, eroded);
+      cv::erode(mask, expected, element);
+      ASSERT_EQ(cv::norm(eroded, expected, cv::NORM_INF), 0.0)
+          << element.size() << " element, " << mask.size() << " mask, trial " << trial;
+    }
+  }
+}
+
+TEST(WorkingImage, ElementsOfOtherShapesHaveNoCentredRuns) {
+  cv::Mat off_centre = cv::Mat::zeros(3, 3, CV_8UC1);
+  off_centre.at<std::uint8_t>(1, 1) = off_centre.at<std::uint8_t>(1, 2) = 1;
+  cv::Mat two_runs = cv::Mat::ones(3, 5, CV_8UC1);
+  two_runs.at<std::uint8_t>(1, 1) = 0;
+  cv::Mat empty_row = cv::Mat::ones(3, 3, CV_8UC1);
+  empty_row.row(0).setTo(0);
+  const cv::Mat even_rows = cv::Mat::ones(2, 3, CV_8UC1);
+  const cv::Mat not_8_bit = cv::Mat::ones(3, 3, CV_32FC1);
+  for (const cv::Mat& element : {off_centre, two_runs, empty_row, even_rows, not_8_bit}) {
+    EXPECT_TRUE(centred_run_half_widths(element).empty()) << element;
   }
 }
 

@@ -194,8 +194,9 @@ class FilletEstimator {
   int downscale_ = 1;
   cv::Matx33d work_to_belt_;  // working-image pixel -> belt mm (no distortion case)
   // Structuring elements, built once for the working scale.
-  cv::Mat interior_erosion_;  // ~3 mm ellipse
-  cv::Mat gap_dilation_;      // min_gap_mm / 2 ellipse
+  cv::Mat interior_erosion_;                // ~3 mm ellipse
+  std::vector<int> interior_erosion_runs_;  // its rows' half widths (centred runs)
+  cv::Mat gap_dilation_;                    // min_gap_mm / 2 ellipse
   int gap_radius_px_ = 1;
   // The texture band: integer reduction from the working scale, and its sigmas there.
   int texture_downscale_ = 1;
@@ -213,6 +214,8 @@ class FilletEstimator {
   cv::Mat labels_;
   cv::Mat interior_;
   cv::Mat eroded_;
+  cv::Mat erosion_padded_;
+  cv::Mat erosion_run_minima_;
   cv::Mat grey_box_;
   cv::Mat texture_grey_;
   cv::Mat texture_inside_;
