@@ -431,11 +431,7 @@ void FilletEstimator::flag_close_blobs(FrameResult& result, const cv::Rect& fore
   if (candidates == 0 || result.blobs.size() < 2) return;
   // Only the mask's foreground box grown by the dilation can be non-zero after it, so the
   // components there are those of the full frame, at a fraction of its cost.
-  const cv::Rect roi =
-      cv::Rect(foreground.x - gap_radius_px_ - 1, foreground.y - gap_radius_px_ - 1,
-               foreground.width + 2 * gap_radius_px_ + 2,
-               foreground.height + 2 * gap_radius_px_ + 2) &
-      cv::Rect(0, 0, mask_.cols, mask_.rows);
+  const cv::Rect roi = detail::grown(foreground, gap_radius_px_ + 1, mask_.size());
   cv::dilate(mask_(roi), scratch_, gap_dilation_);
   cv::connectedComponents(scratch_, labels_, 8, CV_32S);
   const auto label_at = [&](const cv::Point& pixel) { return labels_.at<int>(pixel - roi.tl()); };

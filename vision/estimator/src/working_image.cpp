@@ -45,14 +45,13 @@ inline cv::v_int16x8 chroma8(const cv::v_uint16x8& red, const cv::v_uint16x8& bl
 }
 #endif
 
-// The rectangle grown by `reach_px` on every side, clipped to the image.
+}  // namespace
+
 cv::Rect grown(const cv::Rect& rect, int reach_px, const cv::Size& image) {
   return cv::Rect(rect.x - reach_px, rect.y - reach_px, rect.width + 2 * reach_px,
                   rect.height + 2 * reach_px) &
          cv::Rect(0, 0, image.width, image.height);
 }
-
-}  // namespace
 
 void split_bgr_row(const std::uint8_t* bgr, int cols, std::uint8_t* blue, std::uint8_t* green,
                    std::uint8_t* red) {

@@ -24,6 +24,10 @@ void grey_row(const std::uint8_t* blue, const std::uint8_t* green, const std::ui
 // the float matrix (0.5, -0.5, 128) computes it.
 void chroma_row(const std::uint8_t* blue, const std::uint8_t* red, int cols, std::uint8_t* chroma);
 
+// The rectangle grown by `reach_px` on every side, clipped to the image: the region an
+// operator of that reach can change or read around `rect`.
+cv::Rect grown(const cv::Rect& rect, int reach_px, const cv::Size& image);
+
 // The box of the pixels above `threshold`, from the largest value of each row and of each
 // column (empty when there are none).
 cv::Rect box_above(const std::vector<std::uint8_t>& row_max,
