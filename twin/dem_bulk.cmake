@@ -12,7 +12,7 @@ target_link_libraries(fl_twin_dem_bulk PUBLIC fl_twin_dem fl_twin_fillet fl_cont
                                        PRIVATE fl_report fl_build_flags)
 
 add_executable(bulk_sweep ${CMAKE_CURRENT_LIST_DIR}/src/dem_bulk/tools/bulk_sweep.cpp)
-target_link_libraries(bulk_sweep PRIVATE fl_twin_dem_bulk fl_build_flags)
+target_link_libraries(bulk_sweep PRIVATE fl_twin_dem_bulk CLI11::CLI11 fl_build_flags)
 
 if(FL_BUILD_TESTS)
   file(GLOB FL_TWIN_DEM_BULK_TEST_SOURCES CONFIGURE_DEPENDS

@@ -2,8 +2,8 @@
 //   bulk_sweep [--config config/bulk_dem.yaml] [--out out/bulk_sweep.csv]
 //              [--settle 0.5] [--measure 2.0] [--fill N] [opening_mm ...]
 // Prints one line per opening and writes the CSV (fl_report).
+#include <CLI/CLI.hpp>
 #include <cstdio>
-#include <cstdlib>
 #include <exception>
 #include <string>
 #include <vector>
@@ -11,34 +11,38 @@
 #include "fl/twin/dem_bulk/bulk_scene.hpp"
 
 int main(int argc, char** argv) {
+  CLI::App app{"the DEM mailbox's outflow against its gate opening (thesis 6.1)"};
   std::string config_file = "config/bulk_dem.yaml";
   std::string out_file = "out/bulk_sweep.csv";
   fl::GateSweepOptions options;
-  long fill = -1;
-  std::vector<double> openings;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (arg == "--config" && has_value) {
-      config_file = argv[++i];
-    } else if (arg == "--out" && has_value) {
-      out_file = argv[++i];
-    } else if (arg == "--settle" && has_value) {
-      options.settle_s = std::strtod(argv[++i], nullptr);
-    } else if (arg == "--measure" && has_value) {
-      options.measure_s = std::strtod(argv[++i], nullptr);
-    } else if (arg == "--fill" && has_value) {
-      fill = std::strtol(argv[++i], nullptr, 10);
-    } else {
-      openings.push_back(std::strtod(arg.c_str(), nullptr));
-    }
-  }
-  if (openings.empty()) openings = {40.0, 60.0, 80.0, 100.0};
+  int fill = -1;
+  std::vector<double> openings_mm = {40.0, 60.0, 80.0, 100.0};
+  app.add_option("--config", config_file, "bulk scene configuration")->check(CLI::ExistingFile);
+  app.add_option("--out", out_file, "CSV written with one row per opening");
+  app.add_option("--settle", options.settle_s, "seconds of flow before measuring")
+      ->check(CLI::Range(0.0, 3600.0));
+  app.add_option("--measure", options.measure_s, "seconds measured at each opening")
+      ->check(CLI::Range(1e-3, 3600.0));
+  app.add_option("--fill", fill, "fillets in the hopper at the start (default: the config's)")
+      ->check(CLI::Range(0, 100000));
+  app.add_option("opening_mm", openings_mm, "gate openings in mm (default: 40 60 80 100)")
+      ->check(CLI::Number & CLI::Range(0.0, 1000.0));
+  CLI11_PARSE(app, argc, argv);
   try {
     fl::BulkDemConfig config = fl::load_bulk_dem_config(config_file);
     if (fill >= 0) config.feeder.initial_fill = static_cast<std::uint32_t>(fill);
+    // The scene would clamp an opening to the gate's travel; a sweep point that silently
+    // measured another opening than asked is worse than no point.
+    for (const double opening : openings_mm) {
+      if (opening < config.gate.min_opening_mm || opening > config.gate.max_opening_mm) {
+        std::fprintf(
+            stderr, "bulk_sweep: opening %.1f mm is outside the gate's travel %.1f-%.1f mm (%s)\n",
+            opening, config.gate.min_opening_mm, config.gate.max_opening_mm, config_file.c_str());
+        return 2;
+      }
+    }
     const std::vector<fl::GateSweepPoint> points =
-        fl::sweep_gate_opening(config, openings, options);
+        fl::sweep_gate_opening(config, openings_mm, options);
     for (const fl::GateSweepPoint& p : points) {
       std::printf(
           "opening %6.1f mm: %5.2f fillets/s under the gate (%llu), %5.2f/s discharged, "
