@@ -8,10 +8,12 @@
 #include <algorithm>
 #include <chrono>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "fl/twin/render/fillet_renderer.hpp"
 #include "fl/vision/fillet_estimator.hpp"
+#include "working_image.hpp"
 
 namespace {
 
@@ -102,10 +104,63 @@ void BM_EstimatePair640x480(benchmark::State& state) {
   run(state, fl::render::make_top_down_camera(640, 480, 300.0 / 640.0), true);
 }
 
+// The first stage at the line cameras' 1280 x 1024: the frame to the 640 x 512 working planes.
+// Eight different frames of noise in turn (31 MB, more than this machine's caches hold for
+// one core), as a camera's frames arrive in fresh memory. Argument 0: cv::resize(INTER_AREA)
+// then the split into planes (the estimator before 2026-11-29); 1: halve_bgr_rows' portable
+// code; 2: its fastest code (AVX2 where the CPU has it), as the estimator runs it.
+void BM_WorkingPlanesFrom1280x1024(benchmark::State& state) {
+  cv::setNumThreads(1);
+  constexpr int kFrames = 8;
+  std::vector<cv::Mat> frames(kFrames);
+  cv::RNG rng(1);
+  for (cv::Mat& frame : frames) {
+    frame.create(fl::render::kLineCameraHeightPx, fl::render::kLineCameraWidthPx, CV_8UC3);
+    rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
+  }
+  const cv::Size work(frames[0].cols / 2, frames[0].rows / 2);
+  cv::Mat work_bgr;
+  cv::Mat row_planes(3, work.width, CV_8UC1);
+  cv::Mat green(work, CV_8UC1);
+  cv::Mat red(work, CV_8UC1);
+  const auto code = state.range(0) == 1 ? fl::vision::detail::HalvingCode::kPortable
+                                        : fl::vision::detail::HalvingCode::kFastest;
+  std::size_t i = 0;
+  for (auto _ : state) {
+    const cv::Mat& frame = frames[i++ % frames.size()];
+    if (state.range(0) == 0) {
+      cv::resize(frame, work_bgr, work, 0, 0, cv::INTER_AREA);
+      for (int row = 0; row < work.height; ++row) {
+        fl::vision::detail::split_bgr_row(
+            work_bgr.ptr<std::uint8_t>(row), work.width, row_planes.ptr<std::uint8_t>(0),
+            row_planes.ptr<std::uint8_t>(1), row_planes.ptr<std::uint8_t>(2));
+      }
+    } else {
+      for (int row = 0; row < work.height; ++row) {
+        fl::vision::detail::halve_bgr_rows(
+            frame.ptr<std::uint8_t>(2 * row), frame.ptr<std::uint8_t>(2 * row + 1), work.width,
+            row_planes.ptr<std::uint8_t>(0), green.ptr<std::uint8_t>(row),
+            red.ptr<std::uint8_t>(row), code);
+      }
+    }
+    benchmark::ClobberMemory();
+  }
+  state.SetLabel(state.range(0) == 0                      ? "cv::resize + split"
+                 : state.range(0) == 1                    ? "halve_bgr_rows, portable"
+                 : fl::vision::detail::halving_has_avx2() ? "halve_bgr_rows, AVX2"
+                                                          : "halve_bgr_rows, portable (no AVX2)");
+}
+
 BENCHMARK(BM_Estimate640x480)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 BENCHMARK(BM_EstimateLine1280x1024)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 BENCHMARK(BM_EstimatePair640x480)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 BENCHMARK(BM_Estimate320x240)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+BENCHMARK(BM_WorkingPlanesFrom1280x1024)
+    ->Unit(benchmark::kMicrosecond)
+    ->MinTime(1.0)
+    ->Arg(0)
+    ->Arg(1)
+    ->Arg(2);
 
 }  // namespace
 

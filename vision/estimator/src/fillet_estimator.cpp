@@ -312,27 +312,33 @@ FrameResult FilletEstimator::estimate(const cv::Mat& bgr, std::int64_t frame_tim
                      std::to_string(calibration_.image_height_px);
     return result;
   }
-  if (downscale_ > 1) {
-    cv::resize(bgr, work_bgr_, cv::Size(bgr.cols / downscale_, bgr.rows / downscale_), 0, 0,
-               cv::INTER_AREA);
+  // An exact 2 x 2 reduction (a 1280 x 1024 camera to the 640 x 512 working scale) is done in
+  // the colour pass below, row pair by row pair into planes; other reductions go through
+  // cv::resize first. Both give the same bits.
+  const bool halve_in_pass = downscale_ == 2 && bgr.cols % 2 == 0 && bgr.rows % 2 == 0;
+  const cv::Size work_size(bgr.cols / downscale_, bgr.rows / downscale_);
+  if (halve_in_pass) {
+    work_bgr_.release();
+    work_green_.create(work_size, CV_8UC1);
+    work_red_.create(work_size, CV_8UC1);
+  } else if (downscale_ > 1) {
+    cv::resize(bgr, work_bgr_, work_size, 0, 0, cv::INTER_AREA);
   } else {
     work_bgr_ = bgr;
   }
   // Luma, chroma 128 + (R - B) / 2, the belt count and the histogram in one pass, row by row
   // from colour planes in cache (working_image.hpp). The histogram counts in integers into
   // four tables, so that equal neighbouring pixels do not wait on each other's increment.
-  grey_.create(work_bgr_.size(), CV_8UC1);
-  chroma_.create(work_bgr_.size(), CV_8UC1);
-  planes_.create(3, work_bgr_.cols, CV_8UC1);
+  grey_.create(work_size, CV_8UC1);
+  chroma_.create(work_size, CV_8UC1);
+  planes_.create(3, work_size.width, CV_8UC1);
   std::uint8_t* const blue = planes_.ptr<std::uint8_t>(0);
-  std::uint8_t* const green = planes_.ptr<std::uint8_t>(1);
-  std::uint8_t* const red = planes_.ptr<std::uint8_t>(2);
   std::array<std::array<std::uint32_t, 256>, 4> counts{};
   std::size_t belt_like = 0;
   // The largest chroma per row and per column: once the threshold is known they bound the
   // mask, and the segmentation below runs on that box only.
-  row_max_chroma_.assign(static_cast<std::size_t>(work_bgr_.rows), 0);
-  column_max_chroma_.assign(static_cast<std::size_t>(work_bgr_.cols), 0);
+  row_max_chroma_.assign(static_cast<std::size_t>(work_size.height), 0);
+  column_max_chroma_.assign(static_cast<std::size_t>(work_size.width), 0);
   std::uint8_t* const column_max = column_max_chroma_.data();
   const int belt_low = static_cast<int>(params_.belt_chroma - params_.belt_chroma_tolerance);
   const int belt_high = static_cast<int>(params_.belt_chroma + params_.belt_chroma_tolerance);
@@ -341,7 +347,16 @@ FrameResult FilletEstimator::estimate(const cv::Mat& bgr, std::int64_t frame_tim
   // loops would be reloaded per pixel and block vectorisation.
   const int cols = chroma_.cols;
   for (int row = 0; row < chroma_.rows; ++row) {
-    detail::split_bgr_row(work_bgr_.ptr<std::uint8_t>(row), cols, blue, green, red);
+    std::uint8_t* green = planes_.ptr<std::uint8_t>(1);
+    std::uint8_t* red = planes_.ptr<std::uint8_t>(2);
+    if (halve_in_pass) {
+      green = work_green_.ptr<std::uint8_t>(row);
+      red = work_red_.ptr<std::uint8_t>(row);
+      detail::halve_bgr_rows(bgr.ptr<std::uint8_t>(2 * row), bgr.ptr<std::uint8_t>(2 * row + 1),
+                             cols, blue, green, red);
+    } else {
+      detail::split_bgr_row(work_bgr_.ptr<std::uint8_t>(row), cols, blue, green, red);
+    }
     std::uint8_t* g = grey_.ptr<std::uint8_t>(row);
     std::uint8_t* c = chroma_.ptr<std::uint8_t>(row);
     detail::grey_row(blue, green, red, cols, g);
@@ -573,12 +588,25 @@ BlobResult FilletEstimator::measure_blob(const std::vector<cv::Point>& contour) 
   std::int64_t sum_green = 0, sum_red = 0, sum_grey = 0, count = 0;
   for (int row = 0; row < box.height; ++row) {
     const auto* inside = eroded_.ptr<std::uint8_t>(row);
-    const auto* bgr = work_bgr_.ptr<std::uint8_t>(box.y + row) + 3 * box.x;
     const auto* grey = grey_.ptr<std::uint8_t>(box.y + row) + box.x;
+    // Green and red from their planes (a frame halved in the colour pass) or from the
+    // interleaved working image.
+    const std::uint8_t* green = nullptr;
+    const std::uint8_t* red = nullptr;
+    int pixel_step = 1;
+    if (work_bgr_.empty()) {
+      green = work_green_.ptr<std::uint8_t>(box.y + row) + box.x;
+      red = work_red_.ptr<std::uint8_t>(box.y + row) + box.x;
+    } else {
+      const auto* bgr = work_bgr_.ptr<std::uint8_t>(box.y + row) + 3 * box.x;
+      green = bgr + 1;
+      red = bgr + 2;
+      pixel_step = 3;
+    }
     for (int col = 0; col < box.width; ++col) {
       if (inside[col] == 0) continue;
-      sum_green += bgr[3 * col + 1];
-      sum_red += bgr[3 * col + 2];
+      sum_green += green[pixel_step * col];
+      sum_red += red[pixel_step * col];
       sum_grey += grey[col];
       ++count;
     }

@@ -4,9 +4,20 @@
 #include "working_image.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <opencv2/core/hal/intrin.hpp>
 #include <opencv2/imgproc.hpp>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
+// The AVX2 helpers below take and return 256-bit vectors but are all forced inline into the
+// one AVX2 function, so the calling convention GCC warns about never applies.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
 
 namespace fl::vision::detail {
 namespace {
@@ -35,6 +46,15 @@ inline cv::v_int16x8 luma8(const cv::v_uint16x8& blue, const cv::v_uint16x8& gre
   const cv::v_int32x4 high = cv::v_dotprod(blue_green_high, blue_green_weights) +
                              cv::v_dotprod(red_one_high, red_round_weights);
   return cv::v_pack(low >> kLumaShift, high >> kLumaShift);
+}
+
+// Sums of horizontally adjacent pixels of two rows: lane k of the result is
+// top[2k] + top[2k + 1] + bottom[2k] + bottom[2k + 1].
+inline cv::v_uint16x8 pair_sums(const cv::v_uint8x16& top, const cv::v_uint8x16& bottom) {
+  const cv::v_uint16x8 low_byte = cv::v_setall_u16(0xFF);
+  const cv::v_uint16x8 t = cv::v_reinterpret_as_u16(top);
+  const cv::v_uint16x8 b = cv::v_reinterpret_as_u16(bottom);
+  return (t & low_byte) + (t >> 8) + (b & low_byte) + (b >> 8);
 }
 
 // 2 * chroma = 256 + R - B in 16-bit lanes, halved with ties to the even neighbour.
@@ -70,6 +90,140 @@ void split_bgr_row(const std::uint8_t* bgr, int cols, std::uint8_t* blue, std::u
     green[col] = bgr[3 * col + 1];
     red[col] = bgr[3 * col + 2];
   }
+}
+
+namespace {
+
+// The scalar halving of output pixels [col, out_cols).
+void halve_tail(const std::uint8_t* top, const std::uint8_t* bottom, int col, int out_cols,
+                std::uint8_t* blue, std::uint8_t* green, std::uint8_t* red) {
+  for (; col < out_cols; ++col) {
+    const std::uint8_t* t = top + 6 * col;
+    const std::uint8_t* b = bottom + 6 * col;
+    blue[col] = static_cast<std::uint8_t>((t[0] + t[3] + b[0] + b[3] + 2) >> 2);
+    green[col] = static_cast<std::uint8_t>((t[1] + t[4] + b[1] + b[4] + 2) >> 2);
+    red[col] = static_cast<std::uint8_t>((t[2] + t[5] + b[2] + b[5] + 2) >> 2);
+  }
+}
+
+#if defined(__x86_64__)
+// Byte shuffles for the AVX2 halving. A 128-bit lane holds 16 of a group's 48 bytes (8 pixel
+// pairs, BGR BGR); shuffle [channel][part] moves channel's bytes of pair k that lie in the
+// group's part-th 16 bytes to bytes 2k and 2k + 1 of the lane, and zeroes the rest (index with
+// the top bit set). Both lanes use the same table.
+constexpr std::array<std::array<std::int8_t, 32>, 9> halving_shuffles() {
+  std::array<std::array<std::int8_t, 32>, 9> shuffles{};
+  for (int channel = 0; channel < 3; ++channel) {
+    for (int part = 0; part < 3; ++part) {
+      auto& shuffle = shuffles[static_cast<std::size_t>(3 * channel + part)];
+      for (int pair = 0; pair < 8; ++pair) {
+        for (int pixel = 0; pixel < 2; ++pixel) {
+          const int source = 6 * pair + 3 * pixel + channel;
+          const auto index = static_cast<std::int8_t>(source / 16 == part ? source % 16 : -128);
+          shuffle[static_cast<std::size_t>(2 * pair + pixel)] = index;
+          shuffle[static_cast<std::size_t>(16 + 2 * pair + pixel)] = index;
+        }
+      }
+    }
+  }
+  return shuffles;
+}
+constexpr auto kHalvingShuffles = halving_shuffles();
+
+// A 16-byte part of both 48-byte groups of a row, the first group's in lane 0.
+__attribute__((target("avx2"), always_inline)) inline __m256i group_parts(const std::uint8_t* row,
+                                                                          int part) {
+  const __m128i first = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + 16 * part));
+  const __m128i second = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + 48 + 16 * part));
+  return _mm256_inserti128_si256(_mm256_castsi128_si256(first), second, 1);
+}
+
+// One row's horizontal pair sums of 16 output pixels per channel, as 16-bit lanes: lane 0
+// holds the group at bytes 0..47 (outputs 0..7), lane 1 the group at 48..95 (outputs 8..15).
+__attribute__((target("avx2"), always_inline)) inline void row_pair_sums(const std::uint8_t* row,
+                                                                         __m256i (&sums)[3]) {
+  const __m256i parts[3] = {group_parts(row, 0), group_parts(row, 1), group_parts(row, 2)};
+  const __m256i ones = _mm256_set1_epi8(1);
+  for (int channel = 0; channel < 3; ++channel) {
+    __m256i gathered = _mm256_setzero_si256();
+    for (int part = 0; part < 3; ++part) {
+      const __m256i shuffle = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(
+          kHalvingShuffles[static_cast<std::size_t>(3 * channel + part)].data()));
+      gathered = _mm256_or_si256(gathered, _mm256_shuffle_epi8(parts[part], shuffle));
+    }
+    sums[channel] = _mm256_maddubs_epi16(gathered, ones);  // byte pairs: 2 pixels, one channel
+  }
+}
+
+__attribute__((target("avx2"))) void halve_avx2(const std::uint8_t* top, const std::uint8_t* bottom,
+                                                int out_cols, std::uint8_t* blue,
+                                                std::uint8_t* green, std::uint8_t* red) {
+  std::uint8_t* const planes[3] = {blue, green, red};
+  const __m256i rounding = _mm256_set1_epi16(2);
+  int col = 0;
+  for (; col + 16 <= out_cols; col += 16) {
+    __m256i top_sums[3], bottom_sums[3];
+    row_pair_sums(top + 6 * col, top_sums);
+    row_pair_sums(bottom + 6 * col, bottom_sums);
+    for (int channel = 0; channel < 3; ++channel) {
+      const __m256i mean = _mm256_srli_epi16(
+          _mm256_add_epi16(_mm256_add_epi16(top_sums[channel], bottom_sums[channel]), rounding), 2);
+      _mm_storeu_si128(
+          reinterpret_cast<__m128i*>(planes[channel] + col),
+          _mm_packus_epi16(_mm256_castsi256_si128(mean), _mm256_extracti128_si256(mean, 1)));
+    }
+  }
+  halve_tail(top, bottom, col, out_cols, blue, green, red);
+}
+
+bool cpu_runs_avx2() {
+  static const bool runs = __builtin_cpu_supports("avx2") != 0;
+  return runs;
+}
+#endif
+
+void halve_portable(const std::uint8_t* top, const std::uint8_t* bottom, int out_cols,
+                    std::uint8_t* blue, std::uint8_t* green, std::uint8_t* red) {
+  int col = 0;
+#if CV_SIMD128
+  // 16 outputs from 96 bytes of each row.
+  for (; col + 16 <= out_cols; col += 16) {
+    cv::v_uint8x16 top_b[2], top_g[2], top_r[2], bottom_b[2], bottom_g[2], bottom_r[2];
+    for (int half = 0; half < 2; ++half) {
+      cv::v_load_deinterleave(top + 6 * col + 48 * half, top_b[half], top_g[half], top_r[half]);
+      cv::v_load_deinterleave(bottom + 6 * col + 48 * half, bottom_b[half], bottom_g[half],
+                              bottom_r[half]);
+    }
+    cv::v_store(blue + col, cv::v_rshr_pack<2>(pair_sums(top_b[0], bottom_b[0]),
+                                               pair_sums(top_b[1], bottom_b[1])));
+    cv::v_store(green + col, cv::v_rshr_pack<2>(pair_sums(top_g[0], bottom_g[0]),
+                                                pair_sums(top_g[1], bottom_g[1])));
+    cv::v_store(red + col, cv::v_rshr_pack<2>(pair_sums(top_r[0], bottom_r[0]),
+                                              pair_sums(top_r[1], bottom_r[1])));
+  }
+#endif
+  halve_tail(top, bottom, col, out_cols, blue, green, red);
+}
+
+}  // namespace
+
+bool halving_has_avx2() {
+#if defined(__x86_64__)
+  return cpu_runs_avx2();
+#else
+  return false;
+#endif
+}
+
+void halve_bgr_rows(const std::uint8_t* top, const std::uint8_t* bottom, int out_cols,
+                    std::uint8_t* blue, std::uint8_t* green, std::uint8_t* red, HalvingCode code) {
+#if defined(__x86_64__)
+  if (code != HalvingCode::kPortable && cpu_runs_avx2()) {
+    halve_avx2(top, bottom, out_cols, blue, green, red);
+    return;
+  }
+#endif
+  halve_portable(top, bottom, out_cols, blue, green, red);
 }
 
 void grey_row(const std::uint8_t* blue, const std::uint8_t* green, const std::uint8_t* red,

@@ -17,6 +17,9 @@ using fl::vision::detail::centred_run_half_widths;
 using fl::vision::detail::chroma_row;
 using fl::vision::detail::erode_by_centred_runs;
 using fl::vision::detail::grey_row;
+using fl::vision::detail::halve_bgr_rows;
+using fl::vision::detail::halving_has_avx2;
+using fl::vision::detail::HalvingCode;
 using fl::vision::detail::segment_meat;
 using fl::vision::detail::split_bgr_row;
 
@@ -47,6 +50,62 @@ TEST(WorkingImage, SplitGivesTheChannelsAsPlanes) {
         cv::norm(expected[static_cast<std::size_t>(channel)], planes.row(channel), cv::NORM_INF),
         0.0)
         << "channel " << channel;
+  }
+}
+
+// Halves `frame` pair of rows by pair of rows into planes; `segment` output pixels per call
+// (kTailOnlyPixels for the scalar code alone).
+std::vector<cv::Mat> halved_planes(const cv::Mat& frame, int segment, HalvingCode code) {
+  std::vector<cv::Mat> planes(3);
+  for (cv::Mat& plane : planes) plane.create(frame.rows / 2, frame.cols / 2, CV_8UC1);
+  for (int row = 0; row < frame.rows / 2; ++row) {
+    for (int first = 0; first < frame.cols / 2; first += segment) {
+      const int count = std::min(segment, frame.cols / 2 - first);
+      halve_bgr_rows(frame.ptr<std::uint8_t>(2 * row) + 6 * first,
+                     frame.ptr<std::uint8_t>(2 * row + 1) + 6 * first, count,
+                     planes[0].ptr<std::uint8_t>(row) + first,
+                     planes[1].ptr<std::uint8_t>(row) + first,
+                     planes[2].ptr<std::uint8_t>(row) + first, code);
+    }
+  }
+  return planes;
+}
+
+TEST(WorkingImage, HalvingIsCvResizeAreaSplitIntoPlanes) {
+  // Both codes where the CPU has AVX2 (the fastest is AVX2 then), else the portable one twice.
+  RecordProperty("avx2", halving_has_avx2() ? "yes" : "no");
+  cv::RNG rng(9);
+  // The line camera's frame; a width whose half is 3 blocks of 16 and a tail of 7; and pixels
+  // at the extremes, where a sum of four 255s must not wrap and the rounding shows.
+  std::vector<cv::Mat> frames;
+  for (const cv::Size size : {cv::Size(1280, 1024), cv::Size(2 * (3 * 16 + 7), 10)}) {
+    cv::Mat frame(size, CV_8UC3);
+    rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
+    frames.push_back(frame);
+    cv::Mat extremes(size, CV_8UC3);
+    rng.fill(extremes, cv::RNG::UNIFORM, 0, 2);
+    frames.push_back(extremes * 255);
+    cv::Mat near_halves(size, CV_8UC3);  // sums of 4k + 1 and 4k + 2: the rounding's cases
+    rng.fill(near_halves, cv::RNG::UNIFORM, 0, 4);
+    frames.push_back(near_halves);
+  }
+  for (std::size_t f = 0; f < frames.size(); ++f) {
+    const cv::Mat& frame = frames[f];
+    cv::Mat resized;
+    cv::resize(frame, resized, cv::Size(frame.cols / 2, frame.rows / 2), 0, 0, cv::INTER_AREA);
+    std::vector<cv::Mat> expected;
+    cv::split(resized, expected);
+    for (const HalvingCode code : {HalvingCode::kFastest, HalvingCode::kPortable}) {
+      for (const int segment : {frame.cols / 2, kTailOnlyPixels}) {
+        const std::vector<cv::Mat> planes = halved_planes(frame, segment, code);
+        for (std::size_t channel = 0; channel < 3; ++channel) {
+          EXPECT_EQ(cv::norm(expected[channel], planes[channel], cv::NORM_INF), 0.0)
+              << "frame " << f << " (" << frame.cols << " x " << frame.rows << "), channel "
+              << channel << ", " << segment << " pixels per call, "
+              << (code == HalvingCode::kPortable ? "portable" : "fastest") << " code";
+        }
+      }
+    }
   }
 }
 

@@ -203,7 +203,9 @@ class FilletEstimator {
   double texture_fine_sigma_px_ = 0.75;
   double texture_coarse_sigma_px_ = 2.45;
   // Reused buffers.
-  cv::Mat work_bgr_;
+  cv::Mat work_bgr_;    // empty when the colour pass halves the frame itself
+  cv::Mat work_green_;  // the working image's green and red planes in that case
+  cv::Mat work_red_;
   cv::Mat chroma_;
   cv::Mat grey_;
   cv::Mat planes_;  // one working row as blue, green and red planes
