@@ -315,9 +315,9 @@ FrameResult FilletEstimator::estimate(const cv::Mat& bgr, std::int64_t frame_tim
   // An exact 2 x 2 reduction (a 1280 x 1024 camera to the 640 x 512 working scale) is done in
   // the colour pass below, row pair by row pair into planes; other reductions go through
   // cv::resize first. Both give the same bits.
-  const bool halve_in_pass = downscale_ == 2 && bgr.cols % 2 == 0 && bgr.rows % 2 == 0;
+  halved_in_colour_pass_ = downscale_ == 2 && bgr.cols % 2 == 0 && bgr.rows % 2 == 0;
   const cv::Size work_size(bgr.cols / downscale_, bgr.rows / downscale_);
-  if (halve_in_pass) {
+  if (halved_in_colour_pass_) {
     work_bgr_.release();
     work_green_.create(work_size, CV_8UC1);
     work_red_.create(work_size, CV_8UC1);
@@ -349,7 +349,7 @@ FrameResult FilletEstimator::estimate(const cv::Mat& bgr, std::int64_t frame_tim
   for (int row = 0; row < chroma_.rows; ++row) {
     std::uint8_t* green = planes_.ptr<std::uint8_t>(1);
     std::uint8_t* red = planes_.ptr<std::uint8_t>(2);
-    if (halve_in_pass) {
+    if (halved_in_colour_pass_) {
       green = work_green_.ptr<std::uint8_t>(row);
       red = work_red_.ptr<std::uint8_t>(row);
       detail::halve_bgr_rows(bgr.ptr<std::uint8_t>(2 * row), bgr.ptr<std::uint8_t>(2 * row + 1),
@@ -594,7 +594,7 @@ BlobResult FilletEstimator::measure_blob(const std::vector<cv::Point>& contour) 
     const std::uint8_t* green = nullptr;
     const std::uint8_t* red = nullptr;
     int pixel_step = 1;
-    if (work_bgr_.empty()) {
+    if (halved_in_colour_pass_) {
       green = work_green_.ptr<std::uint8_t>(box.y + row) + box.x;
       red = work_red_.ptr<std::uint8_t>(box.y + row) + box.x;
     } else {

@@ -13,12 +13,6 @@
 #include <immintrin.h>
 #endif
 
-// The AVX2 helpers below take and return 256-bit vectors but are all forced inline into the
-// one AVX2 function, so the calling convention GCC warns about never applies.
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wpsabi"
-#endif
-
 namespace fl::vision::detail {
 namespace {
 
@@ -107,8 +101,15 @@ void halve_tail(const std::uint8_t* top, const std::uint8_t* bottom, int col, in
 }
 
 #if defined(__x86_64__)
+// The AVX2 helpers below take and return 256-bit vectors but are all forced inline into the
+// one AVX2 function, so the calling convention GCC warns about never applies.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
 // Byte shuffles for the AVX2 halving. A 128-bit lane holds 16 of a group's 48 bytes (8 pixel
-// pairs, BGR BGR); shuffle [channel][part] moves channel's bytes of pair k that lie in the
+// pairs, BGR BGR); shuffle 3 * channel + part moves channel's bytes of pair k that lie in the
 // group's part-th 16 bytes to bytes 2k and 2k + 1 of the lane, and zeroes the rest (index with
 // the top bit set). Both lanes use the same table.
 constexpr std::array<std::array<std::int8_t, 32>, 9> halving_shuffles() {
@@ -175,6 +176,10 @@ __attribute__((target("avx2"))) void halve_avx2(const std::uint8_t* top, const s
   }
   halve_tail(top, bottom, col, out_cols, blue, green, red);
 }
+
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
 
 bool cpu_runs_avx2() {
   static const bool runs = __builtin_cpu_supports("avx2") != 0;

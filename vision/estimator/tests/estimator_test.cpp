@@ -6,9 +6,12 @@
 // 5 degree placement tolerance).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <opencv2/imgproc.hpp>
+#include <string>
 
 #include "render_support.hpp"
 
@@ -89,6 +92,66 @@ TEST(FilletEstimator, LineCameraResolutionAllSizes) {
                            size == 1 ? SideUp::kBone : SideUp::kSkin, size));
     expect_matches(estimator.estimate(frame.bgr, 0, 0), frame.truth[0], kCleanPositionToleranceMm,
                    kCleanAngleToleranceRad);
+  }
+}
+
+// The line camera's frames are halved in the colour pass, straight into planes; a frame of
+// odd size, or one reduced by another factor, goes through cv::resize and the interleaved
+// working image. The first must give what the second gives on the same working pixels: the
+// same frame area-averaged by cv::resize and measured at that size with the calibration of
+// its pixels (the full frame's times the halving's pixel map, the product the estimator forms
+// itself). Outlines must agree to the bit; the rest to relative 1e-12: the two calibrations
+// round the millimetres per pixel, and so the texture band's sigmas in pixels, apart in the
+// last bits. Green and red read from the wrong place would move redness and side score by
+// whole per cent.
+TEST(FilletEstimator, HalvedInTheColourPassAsWhenResizedFirst) {
+  const auto camera = camera_line();
+  const BeltCalibration full_calibration = exact_calibration(camera);
+  FilletEstimator halving(full_calibration);
+  ASSERT_EQ(halving.downscale_factor(), 2);
+  BeltCalibration half_calibration = full_calibration;
+  half_calibration.image_width_px = camera.width_px / 2;
+  half_calibration.image_height_px = camera.height_px / 2;
+  half_calibration.image_to_belt =
+      full_calibration.image_to_belt * cv::Matx33d(2, 0, 0.5, 0, 2, 0.5, 0, 0, 1);
+  FilletEstimator resized(half_calibration);
+  ASSERT_EQ(resized.downscale_factor(), 1);
+  const auto near = [](double a, double b) {
+    return std::abs(a - b) <= 1e-12 * std::max({1.0, std::abs(a), std::abs(b)});
+  };
+  // Singles, touching pairs and bent fillets with the evaluation's lighting and noise: the
+  // colour means (redness, side score) and the gap check all read the planes.
+  for (std::uint64_t seed = 0; seed < 12; ++seed) {
+    testing::RandomSceneOptions options;
+    options.touching_pair = seed % 3 == 1;
+    options.bent = seed % 3 == 2;
+    const auto frame =
+        renderer().render(camera, testing::random_scene(camera, 930000 + seed, options)).bgr;
+    cv::Mat half_frame;
+    cv::resize(frame, half_frame, cv::Size(frame.cols / 2, frame.rows / 2), 0, 0, cv::INTER_AREA);
+    const FrameResult a = halving.estimate(frame, 0, 1);
+    const FrameResult b = resized.estimate(half_frame, 0, 1);
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    ASSERT_EQ(a.status, b.status);
+    ASSERT_EQ(a.blobs.size(), b.blobs.size());
+    for (std::size_t i = 0; i < a.blobs.size(); ++i) {
+      const BlobResult& x = a.blobs[i];
+      const BlobResult& y = b.blobs[i];
+      EXPECT_EQ(x.status, y.status) << "blob " << i;
+      EXPECT_EQ(x.features.centroid_px, y.features.centroid_px) << "blob " << i;
+      EXPECT_EQ(x.features.solidity, y.features.solidity) << "blob " << i;
+      EXPECT_TRUE(near(x.features.redness, y.features.redness)) << "blob " << i;
+      EXPECT_TRUE(near(x.features.texture, y.features.texture)) << "blob " << i;
+      EXPECT_TRUE(near(x.features.side_score, y.features.side_score)) << "blob " << i;
+      EXPECT_EQ(x.features.touches_other_blob, y.features.touches_other_blob) << "blob " << i;
+      EXPECT_TRUE(near(x.features.area_mm2, y.features.area_mm2)) << "blob " << i;
+      EXPECT_TRUE(near(x.estimate.x_mm, y.estimate.x_mm)) << "blob " << i;
+      EXPECT_TRUE(near(x.estimate.y_mm, y.estimate.y_mm)) << "blob " << i;
+      EXPECT_TRUE(near(x.estimate.angle_rad, y.estimate.angle_rad)) << "blob " << i;
+      EXPECT_EQ(x.estimate.hand, y.estimate.hand) << "blob " << i;
+      EXPECT_EQ(x.estimate.side, y.estimate.side) << "blob " << i;
+      EXPECT_EQ(x.estimate.singulated, y.estimate.singulated) << "blob " << i;
+    }
   }
 }
 

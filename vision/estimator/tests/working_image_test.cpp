@@ -85,7 +85,7 @@ TEST(WorkingImage, HalvingIsCvResizeAreaSplitIntoPlanes) {
     cv::Mat extremes(size, CV_8UC3);
     rng.fill(extremes, cv::RNG::UNIFORM, 0, 2);
     frames.push_back(extremes * 255);
-    cv::Mat near_halves(size, CV_8UC3);  // sums of 4k + 1 and 4k + 2: the rounding's cases
+    cv::Mat near_halves(size, CV_8UC3);  // small sums: 4k + 1, + 2 and + 3 round apart
     rng.fill(near_halves, cv::RNG::UNIFORM, 0, 4);
     frames.push_back(near_halves);
   }

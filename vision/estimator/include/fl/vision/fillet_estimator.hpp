@@ -203,12 +203,15 @@ class FilletEstimator {
   double texture_fine_sigma_px_ = 0.75;
   double texture_coarse_sigma_px_ = 2.45;
   // Reused buffers.
-  cv::Mat work_bgr_;    // empty when the colour pass halves the frame itself
-  cv::Mat work_green_;  // the working image's green and red planes in that case
+  // The working image: interleaved (the frame itself, or cv::resize's result), or, when the
+  // colour pass halves the frame itself, only its green and red planes (for the colour means).
+  bool halved_in_colour_pass_ = false;
+  cv::Mat work_bgr_;
+  cv::Mat work_green_;
   cv::Mat work_red_;
   cv::Mat chroma_;
   cv::Mat grey_;
-  cv::Mat planes_;  // one working row as blue, green and red planes
+  cv::Mat planes_;  // one working row's planes (only blue when the pass halves the frame)
   std::vector<std::uint8_t> row_max_chroma_;
   std::vector<std::uint8_t> column_max_chroma_;
   cv::Mat mask_;
