@@ -335,16 +335,8 @@ Table TwinBulkFlowModel::run(const Dataset& dataset, const Trial& trial) {
   if (feed != trial.conditions.end()) config.feeder.rate_per_s = std::get<double>(feed->second);
   const std::vector<double>& opening_m = trial.data.at("opening").values_si;
   std::vector<double> openings_mm;
-  for (const double opening : opening_m) {
-    const double opening_mm = opening * 1e3;
-    if (opening_mm < config.gate.min_opening_mm || opening_mm > config.gate.max_opening_mm) {
-      std::ostringstream reason;
-      reason << "the bulk-flow model's gate opens " << config.gate.min_opening_mm << " to "
-             << config.gate.max_opening_mm << " mm, not " << opening_mm << " mm";
-      throw std::runtime_error(reason.str());
-    }
-    openings_mm.push_back(opening_mm);
-  }
+  for (const double opening : opening_m) openings_mm.push_back(opening * 1e3);
+  // The sweep refuses an opening beyond the gate's travel, naming it.
   const std::vector<GateSweepPoint> points = sweep_gate_opening(
       config, openings_mm, GateSweepOptions{settings_.settle_s, settings_.measure_s});
   std::vector<double> outflow_kg_per_s;

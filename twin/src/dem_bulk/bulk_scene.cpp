@@ -6,7 +6,9 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include "fl/report/csv.hpp"
 #include "fl/twin/dem/fillet_generator.hpp"
@@ -526,12 +528,42 @@ LevellerLoad BulkScene::leveller_load() const {
 std::vector<GateSweepPoint> sweep_gate_opening(const BulkDemConfig& config,
                                                std::span<const double> openings_mm,
                                                const GateSweepOptions& options) {
+  // The scene runs whole control steps and the rates divide by the time asked for, and a
+  // clamped opening would be measured under another name: a point that measured something
+  // other than what was asked is refused, not returned. NaN passes every < and >, so each
+  // range is written as what is allowed.
+  const double step_s = config.simulation.control_step_s;
+  const auto whole_steps = [step_s](double seconds) {
+    const double steps = seconds / step_s;
+    return std::abs(steps - std::round(steps)) <= 1e-9 * std::max(1.0, steps);
+  };
+  const auto refuse = [](const std::string& what) {
+    throw std::runtime_error("gate sweep: " + what);
+  };
+  if (!(options.settle_s >= 0.0) || !std::isfinite(options.settle_s) ||
+      !whole_steps(options.settle_s)) {
+    refuse("settling time " + std::to_string(options.settle_s) +
+           " s must be zero or more whole control steps of " + std::to_string(step_s) + " s");
+  }
+  if (!(options.measure_s >= step_s) || !std::isfinite(options.measure_s) ||
+      !whole_steps(options.measure_s)) {
+    refuse("measuring time " + std::to_string(options.measure_s) +
+           " s must be one or more whole control steps of " + std::to_string(step_s) + " s");
+  }
+  for (const double opening : openings_mm) {
+    if (!(opening >= config.gate.min_opening_mm && opening <= config.gate.max_opening_mm)) {
+      std::ostringstream reason;
+      reason << "the gate opens " << config.gate.min_opening_mm << " to "
+             << config.gate.max_opening_mm << " mm, not " << opening << " mm";
+      refuse(reason.str());
+    }
+  }
   std::vector<GateSweepPoint> points;
   for (const double opening : openings_mm) {
     const auto start = std::chrono::steady_clock::now();
     BulkDemConfig c = config;
     // The gate stands at the opening from the start (no cylinder travel in the measurement).
-    c.gate.opening_mm = std::clamp(opening, c.gate.min_opening_mm, c.gate.max_opening_mm);
+    c.gate.opening_mm = opening;
     BulkScene scene(c);
     scene.step(options.settle_s);
     const BulkCounters before = scene.counters();

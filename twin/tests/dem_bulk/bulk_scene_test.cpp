@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <stdexcept>
+#include <string>
 
 #include "fl/controller/yaml_reader.hpp"
 
@@ -176,6 +178,27 @@ TEST_F(BulkOutflow, OutflowRisesWithTheOpening) {
   EXPECT_LE(points_[1].gate_passes, points_[2].gate_passes);
   EXPECT_LE(points_[2].gate_passes, points_[3].gate_passes);
   EXPECT_LT(points_[1].gate_passes, points_[3].gate_passes);
+}
+
+// A sweep that would measure something other than what was asked is refused before any scene
+// is built: the shipped gate travels 0 to 150 mm and the control step is 2 ms, so 150.5 mm,
+// NaN, 3 ms (one and a half steps) and 1 ms (under one step) are each refused, naming the value.
+TEST(BulkSweep, RefusesWhatTheSceneCannotMeasureAsAsked) {
+  const BulkDemConfig config = load_bulk_dem_config(kConfig);
+  const auto refusal = [&](double opening_mm, double settle_s, double measure_s) {
+    const double openings[] = {opening_mm};
+    try {
+      (void)sweep_gate_opening(config, openings, GateSweepOptions{settle_s, measure_s});
+    } catch (const std::runtime_error& error) {
+      return std::string(error.what());
+    }
+    return std::string("ran");
+  };
+  EXPECT_NE(refusal(150.5, 0.5, 2.0).find("not 150.5 mm"), std::string::npos);
+  EXPECT_NE(refusal(std::nan(""), 0.5, 2.0).find("not nan mm"), std::string::npos);
+  EXPECT_NE(refusal(60.0, 0.5, 0.003).find("measuring time 0.003"), std::string::npos);
+  EXPECT_NE(refusal(60.0, 0.5, 0.001).find("measuring time 0.001"), std::string::npos);
+  EXPECT_NE(refusal(60.0, std::nan(""), 2.0).find("settling time nan"), std::string::npos);
 }
 
 TEST(BulkLeveller, KnocksBackTheTopFilletOfAStack) {

@@ -240,6 +240,8 @@ struct GateSweepPoint {
   double leveller_torque_nm = 0.0;  // mean over measure_s
   double wall_s = 0.0;              // computer time of this opening
 };
+// Throws std::runtime_error, naming the value, for an opening outside the gate's travel or a
+// time that is not whole control steps (the measuring time at least one).
 std::vector<GateSweepPoint> sweep_gate_opening(const BulkDemConfig& config,
                                                std::span<const double> openings_mm,
                                                const GateSweepOptions& options = {});
