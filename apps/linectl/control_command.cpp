@@ -249,7 +249,7 @@ int run_control(ControlParts& parts, dds::DdsProcessIo& io, const ModeHooks& hoo
 
   nlohmann::json json = to_json(kpis);
   for (const char* key : {"truth", "placed_per_minute", "in_spec_share_of_singulated", "plant",
-                          "seed", "simulated_s", "realtime_factor"}) {
+                          "seed", "simulated_s", "realtime_factor", "slowest_second"}) {
     json.erase(key);
   }
   json["runtime"] = {{"scans", stats.scans},

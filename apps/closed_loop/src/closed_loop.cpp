@@ -118,6 +118,8 @@ Kpis run_closed_loop(const LineConfig& config, Plant& plant, const RunOptions& o
   const std::int64_t scans_per_second = static_cast<std::int64_t>(kNsPerS) / options.period_ns;
   std::int64_t scan = 0;
   bool stop_sent = false;
+  auto second_start = wall_start;
+  double slowest_second_wall_s = 0.0;
   for (; scan < feed_scans + drain_scans; ++scan) {
     if (scan == feed_scans) {
       controller.request_stop();
@@ -136,6 +138,16 @@ Kpis run_closed_loop(const LineConfig& config, Plant& plant, const RunOptions& o
     if (options.after_update) options.after_update(in, out);
     plant.step(out, options.period_ns, in);
     drain();
+    if ((scan + 1) % scans_per_second == 0) {
+      const auto now = std::chrono::steady_clock::now();
+      const double second_wall_s = std::chrono::duration<double>(now - second_start).count();
+      second_start = now;
+      if (second_wall_s > slowest_second_wall_s) {
+        slowest_second_wall_s = second_wall_s;
+        kpis.slowest_second_at_s = static_cast<double>(scan + 1 - scans_per_second) * period_s;
+        kpis.slowest_second_fillets_on_line = plant.fillets_on_line();
+      }
+    }
     if (options.progress && scan % scans_per_second == 0) {
       options.progress(static_cast<double>(scan) * period_s, options.duration_s);
     }
@@ -152,6 +164,9 @@ Kpis run_closed_loop(const LineConfig& config, Plant& plant, const RunOptions& o
   collector.finish(controller, plant.fillets_fed(), plant.fillets_on_line(), options.duration_s,
                    static_cast<double>(scan) * period_s, wall_s, kpis);
   kpis.compute = compute_histogram.summary();
+  // One second of line time per measured second: the factor is its inverse.
+  kpis.slowest_second_realtime_factor =
+      slowest_second_wall_s > 0.0 ? 1.0 / slowest_second_wall_s : 0.0;
   return kpis;
 }
 
@@ -166,7 +181,7 @@ nlohmann::json to_json(const Kpis& kpis) {
   }
   const TruthTally& t = kpis.truth;
   const ControllerCounters& c = kpis.counters;
-  return {
+  nlohmann::json json = {
       {"plant", kpis.plant},
       {"seed", kpis.seed},
       {"fed_duration_s", kpis.fed_duration_s},
@@ -209,6 +224,12 @@ nlohmann::json to_json(const Kpis& kpis) {
         {"faults_seen", faults}}},
       {"cycle_compute_us", to_json_us(kpis.compute)},
   };
+  if (kpis.slowest_second_realtime_factor > 0.0) {
+    json["slowest_second"] = {{"realtime_factor", kpis.slowest_second_realtime_factor},
+                              {"at_s", kpis.slowest_second_at_s},
+                              {"fillets_on_line", kpis.slowest_second_fillets_on_line}};
+  }
+  return json;
 }
 
 nlohmann::json to_json_us(const DistributionSummary& summary) {
@@ -229,6 +250,13 @@ std::string format_kpis(const Kpis& kpis) {
   text << "plant " << kpis.plant << ", seed " << kpis.seed << ", " << kpis.fed_duration_s
        << " s fed + drain (" << kpis.total_simulated_s << " s simulated in " << kpis.wall_s
        << " s wall, " << kpis.realtime_factor << "x real time)\n";
+  if (kpis.slowest_second_realtime_factor > 0.0) {
+    text.precision(2);
+    text << "slowest second  " << kpis.slowest_second_realtime_factor << "x real time, from "
+         << kpis.slowest_second_at_s << " s of line time with "
+         << kpis.slowest_second_fillets_on_line << " fillets on the line\n";
+    text.precision(1);
+  }
   text << "throughput      " << kpis.placed_per_minute << " placed/min, " << kpis.items_per_minute
        << " items/min at the takt\n";
   text.precision(2);

@@ -58,6 +58,12 @@ struct Kpis {
   double total_simulated_s = 0.0;
   double wall_s = 0.0;
   double realtime_factor = 0.0;
+  // The pace in the slowest whole second of line time (lock-step runs): what a hardware-in-
+  // the-loop twin must keep up at all times, where the overall factor averages over a line
+  // that starts empty. 0 when no whole second was run.
+  double slowest_second_realtime_factor = 0.0;
+  double slowest_second_at_s = 0.0;                  // line time at the start of that second
+  std::uint64_t slowest_second_fillets_on_line = 0;  // on the belts at its end
 
   TruthTally truth;
   double placed_per_minute = 0.0;  // fillets placed at the outfeed per minute of feeding
