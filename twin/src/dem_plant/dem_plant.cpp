@@ -104,6 +104,7 @@ std::shared_ptr<const dem::Model> DemPlant::build_model() const {
                                          fillet.youngs_modulus_pa, fillet.poisson_ratio);
   spec.neighbor_skin_m = config_.simulation.neighbor_skin_mm * kMm;
   spec.thread_count = config_.simulation.thread_count;
+  spec.min_particles_per_thread = config_.simulation.min_particles_per_thread;
   spec.planes.clear();  // planes are infinite: the line is built of finite meshes only
   spec.meshes.clear();
 

@@ -33,6 +33,8 @@ DemPlantConfig load_dem_plant_config(const std::filesystem::path& file) {
       s.rayleigh_fraction = map.read_float("rayleigh_fraction", Range::above(0.0).and_at_most(0.4));
       s.neighbor_skin_mm = map.read_float("neighbor_skin_mm", Range::above(0.0).and_at_most(20.0));
       s.thread_count = map.read_int<int>("thread_count", Range::closed(1, 256));
+      s.min_particles_per_thread =
+          map.read_int<int>("min_particles_per_thread", Range::closed(1, 1000000));
       // Above 5 ms the step would skip the drive delay.
       s.control_step_s = map.read_float("control_step_s", Range::above(0.0).and_at_most(0.005));
       s.max_fillets = map.read_int<std::uint32_t>("max_fillets", Range::closed(1, 4096));

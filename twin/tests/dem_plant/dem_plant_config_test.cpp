@@ -48,9 +48,16 @@ std::string load_error(const fs::path& file) {
   return "";
 }
 
-TEST(DemPlantConfigFile, ShippedMachineryEqualsTheDefaults) {
+TEST(DemPlantConfigFile, ShippedMachineryAndSimulationEqualTheDefaults) {
   const DemPlantConfig loaded = load_dem_plant_config(kConfigDir / "plant_dem.yaml");
   EXPECT_EQ(loaded.machinery, default_dem_plant_config().machinery);
+  EXPECT_EQ(loaded.simulation, default_dem_plant_config().simulation);
+}
+
+TEST(DemPlantConfigFile, ZeroParticlesPerThreadIsRefused) {
+  const std::string error = load_error(variant_file("per_thread", "  min_particles_per_thread: 256",
+                                                    "  min_particles_per_thread: 0"));
+  EXPECT_NE(error.find("simulation.min_particles_per_thread"), std::string::npos) << error;
 }
 
 TEST(DemPlantConfigFile, GuideThatWouldStartBelowTheRejectBeltIsRefused) {

@@ -86,6 +86,27 @@ TEST(DemPlantRun, ASpawnedFilletIsNotBent) {
   }
 }
 
+// The shipped line takes a second engine thread from twice min_particles_per_thread spheres:
+// one fillet stays on one thread, ten (a part-filled line) share two.
+TEST(DemPlantRun, ALineOfFilletsTakesTheSecondThread) {
+  DemRig rig(test_config(2));
+  const int per_thread = rig.config.simulation.min_particles_per_thread;
+  ASSERT_EQ(per_thread, 256);  // config/plant_dem.yaml
+  DemFilletSpawn spawn;
+  spawn.s_mm = 1900.0;
+  ASSERT_TRUE(rig.plant->spawn_fillet(spawn));
+  rig.step();
+  ASSERT_LT(rig.plant->simulation().state().size(), 2U * 256U);
+  EXPECT_EQ(rig.plant->simulation().active_thread_count(), 1);
+  for (int k = 1; k < 10; ++k) {      // the smallest variant: about 60 spheres at 7 mm
+    spawn.s_mm = 1900.0 + 300.0 * k;  // apart on the stopped line
+    ASSERT_TRUE(rig.plant->spawn_fillet(spawn));
+  }
+  rig.step();
+  ASSERT_GE(rig.plant->simulation().state().size(), 2U * 256U);
+  EXPECT_EQ(rig.plant->simulation().active_thread_count(), 2);
+}
+
 TEST(DemPlantRun, SameSeedAndThreadsGiveIdenticalImages) {
   // Feeder on (bulk and leveller run): fillets enter the takt belt from the seeded draws.
   auto make = [] {
