@@ -282,6 +282,8 @@ void BulkScene::count_and_remove() {
         ++counters_.discharged;
         counters_.discharged_mass_kg += mass;
         discharge_events_.push_back({now, mass});
+      } else {
+        ++counters_.lost;
       }
     }
   }
@@ -294,6 +296,15 @@ void BulkScene::take_out_removed() {
     if (f.remove) bodies.push_back(f.body);
   }
   if (bodies.empty()) return;
+  const dem::State& state = sim_->state();
+  std::vector<char> leaving(fillet_of_body_.size(), 0);
+  for (const std::uint32_t b : bodies) leaving[b] = 1;
+  for (std::size_t k = 0; k < state.bonds.size(); ++k) {
+    const std::uint32_t body = state.body[state.bonds[k].i];
+    if (state.bond_states[k].broken && body < leaving.size() && leaving[body] != 0) {
+      ++counters_.broken_bonds_removed;
+    }
+  }
   sim_->remove_bodies(bodies);  // loose spheres and the other fillets keep their state
   std::erase_if(fillets_, [](const Fillet& f) { return f.remove; });
   std::uint32_t body_end = 0;
@@ -492,6 +503,14 @@ double BulkScene::mass_flow_kg_per_s(double window_s) const {
 double BulkScene::gate_pass_rate_per_s(double window_s) const {
   return rate(gate_events_, window_s, false);
 }
+double BulkScene::gate_mass_flow_kg_per_s(double window_s) const {
+  return rate(gate_events_, window_s, true);
+}
+
+bool is_whole_control_steps(double seconds, double control_step_s) {
+  const double steps = seconds / control_step_s;
+  return std::abs(steps - std::round(steps)) <= 1e-9 * std::max(1.0, steps);
+}
 
 LevellerLoad BulkScene::leveller_load() const {
   const dem::State& s = sim_->state();
@@ -534,8 +553,7 @@ std::vector<GateSweepPoint> sweep_gate_opening(const BulkDemConfig& config,
   // range is written as what is allowed.
   const double step_s = config.simulation.control_step_s;
   const auto whole_steps = [step_s](double seconds) {
-    const double steps = seconds / step_s;
-    return std::abs(steps - std::round(steps)) <= 1e-9 * std::max(1.0, steps);
+    return is_whole_control_steps(seconds, step_s);
   };
   const auto refuse = [](const std::string& what) {
     throw std::runtime_error("gate sweep: " + what);

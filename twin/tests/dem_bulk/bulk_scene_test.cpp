@@ -183,6 +183,19 @@ TEST_F(BulkOutflow, OutflowRisesWithTheOpening) {
 // A sweep that would measure something other than what was asked is refused before any scene
 // is built: the shipped gate travels 0 to 150 mm and the control step is 2 ms, so 150.5 mm,
 // NaN, 3 ms (one and a half steps) and 1 ms (under one step) are each refused, naming the value.
+// A fillet under the belt plane (off the scene's side or through a gap) is taken out and
+// counted as lost, not as discharged, so fed = in the scene + discharged + lost still holds.
+TEST(BulkCounting, AFilletFallenUnderTheBeltIsCountedLost) {
+  BulkScene scene(empty_scene_config());
+  scene.add_fillet(0, Vec3(0.3, 0.0, -0.3), Eigen::Quaterniond::Identity());  // 0.3 m below
+  scene.add_fillet(0, Vec3(0.3, 0.0, 0.03), Eigen::Quaterniond::Identity());  // on the belt
+  scene.step(0.002);                                                          // one control step
+  EXPECT_EQ(scene.counters().lost, 1U);
+  EXPECT_EQ(scene.counters().discharged, 0U);
+  EXPECT_EQ(scene.fillets_in_scene(), 1U);
+  EXPECT_EQ(scene.counters().broken_bonds_removed, 0U);  // it left whole
+}
+
 TEST(BulkSweep, RefusesWhatTheSceneCannotMeasureAsAsked) {
   const BulkDemConfig config = load_bulk_dem_config(kConfig);
   const auto refusal = [&](double opening_mm, double settle_s, double measure_s) {

@@ -110,6 +110,10 @@ struct BulkCounters {
   double passed_gate_mass_kg = 0.0;
   std::uint64_t discharged = 0;  // centroid past the discharge edge (removed)
   double discharged_mass_kg = 0.0;
+  std::uint64_t lost = 0;  // fell off the scene (centroid under the belt plane; removed)
+  // Broken bonds that left with removed fillets: with the engine's broken bonds now, the
+  // damage done since the start.
+  std::uint64_t broken_bonds_removed = 0;
   std::uint64_t rebuilds = 0;  // engine rebuilt to take fillets out
 };
 
@@ -145,7 +149,8 @@ class BulkScene {
 
   // ---- state and geometry
   [[nodiscard]] double time_s() const;
-  [[nodiscard]] double gate_opening_mm() const;          // where the gate is now
+  [[nodiscard]] double gate_opening_mm() const;                            // where the gate is now
+  [[nodiscard]] double gate_target_mm() const { return gate_target_mm_; }  // commanded
   [[nodiscard]] double gate_lower_edge_z_m() const;      // from the placed gate mesh
   [[nodiscard]] double leveller_lowest_tip_z_m() const;  // lowest blade tip now
   [[nodiscard]] double leveller_angle_rad() const;
@@ -164,6 +169,7 @@ class BulkScene {
   [[nodiscard]] double outflow_rate_per_s(double window_s) const;
   [[nodiscard]] double mass_flow_kg_per_s(double window_s) const;
   [[nodiscard]] double gate_pass_rate_per_s(double window_s) const;
+  [[nodiscard]] double gate_mass_flow_kg_per_s(double window_s) const;  // the mailbox's outflow
   // Load on the leveller at the end of the last engine step: the torque is the engine's
   // reaction on the rotor wall (dem::State::wall_torque_nm); the contact count and force sum
   // are recounted from the spheres overlapping a rotor triangle (Hertz elastic part,
@@ -221,6 +227,10 @@ class BulkScene {
   std::vector<Event> discharge_events_;
   LevellerLoad load_mean_;
 };
+
+// Whether `seconds` is a whole number of control steps (within rounding): the scene runs whole
+// steps, so a time between them would be run as another time than asked.
+[[nodiscard]] bool is_whole_control_steps(double seconds, double control_step_s);
 
 // Outflow of the mailbox against its opening (the thesis' 6.1 experiment in the model): for each
 // opening a fresh scene with the same seed and fill, `settle_s` with the gate at the opening,
