@@ -114,6 +114,9 @@ struct BulkCounters {
   // Broken bonds that left with removed fillets: with the engine's broken bonds now, the
   // damage done since the start.
   std::uint64_t broken_bonds_removed = 0;
+  // Spheres torn off a fillet that fell under the belt plane while their fillet stays on the
+  // belt: held still there (see BulkScene::stop_fallen_spheres), counted once each.
+  std::uint64_t fallen_spheres = 0;
   std::uint64_t rebuilds = 0;  // engine rebuilt to take fillets out
 };
 
@@ -196,6 +199,7 @@ class BulkScene {
   void control_step(double h_s);
   void scan();
   void count_and_remove();
+  void stop_fallen_spheres();
   void take_out_removed();
   void feed(double h_s);
   bool drop_random_fillet(const dem::Vec3& centre_m);
