@@ -218,6 +218,7 @@ BulkRunSummary run_bulk_experiment(BulkScene& scene, const BulkRunOptions& optio
     s.discharged = scene.counters().discharged;
     s.discharged_mass_kg = scene.counters().discharged_mass_kg;
     s.lost = scene.counters().lost;
+    s.fallen_spheres = scene.counters().fallen_spheres;
     s.gate_passes_per_s = scene.gate_pass_rate_per_s(options.rate_window_s);
     s.gate_mass_flow_kg_per_s = scene.gate_mass_flow_kg_per_s(options.rate_window_s);
     s.discharge_mass_flow_kg_per_s = scene.mass_flow_kg_per_s(options.rate_window_s);
@@ -298,6 +299,7 @@ void write_bulk_run_csv(std::span<const BulkRunSample> samples, const std::files
                           "discharged",
                           "discharged_mass_kg",
                           "lost",
+                          "fallen_spheres",
                           "gate_passes_per_s",
                           "gate_mass_flow_kg_per_s",
                           "discharge_mass_flow_kg_per_s",
@@ -324,6 +326,7 @@ void write_bulk_run_csv(std::span<const BulkRunSample> samples, const std::files
                    d(s.discharged),
                    s.discharged_mass_kg,
                    d(s.lost),
+                   d(s.fallen_spheres),
                    s.gate_passes_per_s,
                    s.gate_mass_flow_kg_per_s,
                    s.discharge_mass_flow_kg_per_s,

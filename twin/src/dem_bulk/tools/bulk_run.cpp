@@ -90,6 +90,7 @@ void write_summary_json(const fl::BulkRunSummary& summary, const fl::BulkRunOpti
         {"discharged", last.discharged},
         {"discharged_mass_kg", last.discharged_mass_kg},
         {"lost", last.lost},
+        {"fallen_spheres", last.fallen_spheres},
         {"bonds", last.bonds},
         {"broken_bonds_total", last.broken_bonds_total},
         {"neighbor_rebuilds", last.neighbor_rebuilds}}},

@@ -67,8 +67,9 @@ struct BulkRunSample {
   std::uint64_t passed_gate = 0;  // totals since the start
   std::uint64_t discharged = 0;
   double discharged_mass_kg = 0.0;
-  std::uint64_t lost = 0;          // fell off the scene
-  double gate_passes_per_s = 0.0;  // over the rate window
+  std::uint64_t lost = 0;            // fell off the scene
+  std::uint64_t fallen_spheres = 0;  // torn off and fallen under the scene (held there)
+  double gate_passes_per_s = 0.0;    // over the rate window
   double gate_mass_flow_kg_per_s = 0.0;
   double discharge_mass_flow_kg_per_s = 0.0;
   double leveller_torque_nm = 0.0;       // mean over the sample's control steps
