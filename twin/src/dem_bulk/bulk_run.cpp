@@ -371,35 +371,29 @@ void write_bulk_run_plots(std::span<const BulkRunSample> samples, const BulkRunO
   }
   const std::string window = number_text(options.rate_window_s);
 
-  report::Plot flow;
-  flow.title = "Bulk box: mass flow (means over " + window + " s)";
-  flow.x.label = "time (s)";
-  flow.y.label = "mass flow (kg/s)";
-  flow.series.push_back(line_series("under the gate", t, gate_flow));
-  flow.series.push_back(line_series("over the discharge edge", t, edge_flow));
-  flow.references = changes;
-  report::write_svg(flow, directory / "bulk_run_flow.svg");
-
-  report::Plot pile;
-  pile.title = "Bulk box: fillets left";
-  pile.x.label = "time (s)";
-  pile.y.label = "fillets";
-  pile.y.min = 0.0;
-  pile.series.push_back(line_series("in the box (upstream of the gate)", t, in_box));
-  pile.series.push_back(line_series("in the scene", t, in_scene));
-  pile.references = changes;
-  report::write_svg(pile, directory / "bulk_run_pile.svg");
-
+  const auto plot_over_time = [&](std::string title, std::string y_label,
+                                  std::vector<report::Series> series, const char* file) {
+    report::Plot plot;
+    plot.title = std::move(title);
+    plot.x.label = "time (s)";
+    plot.y.label = std::move(y_label);
+    plot.y.min = 0.0;  // flows, counts: all from 0
+    plot.series = std::move(series);
+    plot.references = changes;
+    report::write_svg(plot, directory / file);
+  };
+  plot_over_time("Bulk box: mass flow (means over " + window + " s)", "mass flow (kg/s)",
+                 {line_series("under the gate", t, gate_flow),
+                  line_series("over the discharge edge", t, edge_flow)},
+                 "bulk_run_flow.svg");
+  plot_over_time("Bulk box: fillets left", "fillets",
+                 {line_series("in the box (upstream of the gate)", t, in_box),
+                  line_series("in the scene", t, in_scene)},
+                 "bulk_run_pile.svg");
   // Broken bonds as a count from 0: a fraction of a per cent torn is what matters, and it
   // keeps counting when torn fillets leave the scene.
-  report::Plot bonds;
-  bonds.title = "Bonds broken since the start (the fillets' damage)";
-  bonds.x.label = "time (s)";
-  bonds.y.label = "broken bonds";
-  bonds.y.min = 0.0;
-  bonds.series.push_back(line_series("", t, broken));
-  bonds.references = changes;
-  report::write_svg(bonds, directory / "bulk_run_bonds.svg");
+  plot_over_time("Bonds broken since the start (the fillets' damage)", "broken bonds",
+                 {line_series("", t, broken)}, "bulk_run_bonds.svg");
 }
 
 }  // namespace fl
