@@ -143,6 +143,7 @@ int record_twin(const RecordArgs& args, double duration_s) {
       {"seed", std::to_string(args.seed)},
       {"duration_s", std::to_string(duration_s)},
       {"frame_size_px", std::to_string(args.width_px) + "x" + std::to_string(args.height_px)},
+      {"binning", std::to_string(args.binning)},
       {"sensor_mount", args.sensor_mount},
       {"latency_ms", std::to_string(args.latency_ms)}};
   rec::RecordingWriter writer(args.out, settings);
@@ -162,6 +163,7 @@ int record_twin(const RecordArgs& args, double duration_s) {
     rec::TwinCameraSettings camera_settings;
     camera_settings.width_px = args.width_px;
     camera_settings.height_px = args.height_px;
+    camera_settings.binning = args.binning;
     camera_settings.field_along_travel_mm = static_cast<double>(mount.field_of_view_mm);
     camera_settings.mount = args.sensor_mount == "along" ? rec::SensorMount::kLongSideAlongTravel
                                                          : rec::SensorMount::kLongSideAcrossTravel;
@@ -337,6 +339,11 @@ CLI::App* add_record_subcommand(CLI::App& app, RecordArgs& args) {
   record->add_option("--width", args.width_px, "twin frame width, px")->check(CLI::Range(64, 4096));
   record->add_option("--height", args.height_px, "twin frame height, px")
       ->check(CLI::Range(48, 4096));
+  record
+      ->add_option("--binning", args.binning,
+                   "twin cameras bin N x N sensor pixels into one (the line cameras: "
+                   "--width 640 --height 512 --binning 2)")
+      ->check(CLI::Range(1, 4));
   record
       ->add_option("--sensor-mount", args.sensor_mount,
                    "twin cameras: the sensor's long side across the belt (whole width) or along")

@@ -22,8 +22,9 @@ struct RecordArgs {
   std::string config;        // line configuration
   std::string plant_config;  // plant configuration (default per plant)
   std::vector<std::string> cameras{"orientation"};
-  int width_px = 640;
+  int width_px = 640;  // twin frames as delivered
   int height_px = 480;
+  int binning = 1;  // twin cameras: sensor pixels averaged per delivered pixel and axis
   // Twin cameras: the sensor's long side across the belt (all 400 mm; the default) or along
   // it (225 mm across at 4:3); docs/vision.md "Twin cameras"
   std::string sensor_mount = "across";

@@ -506,12 +506,14 @@ RenderedFrame FilletRenderer::render(const RenderCamera& camera, const Scene& sc
     prepared.push_back(prepare(sprites_->by_index[sprite_index(fillet)], fillet, scene, i));
   }
 
-  const cv::Matx33d image_to_belt = camera.belt_to_image.inv();
+  // Light is imaged on the sensor's pixels; apply_imaging bins them to the delivered image.
+  const RenderCamera sensor = sensor_of(camera);
+  const cv::Matx33d image_to_belt = sensor.belt_to_image.inv();
   const int n = scene.supersampling;
-  cv::Mat radiance(camera.height_px, camera.width_px, CV_32FC3);
-  for (int row = 0; row < camera.height_px; ++row) {
+  cv::Mat radiance(sensor.height_px, sensor.width_px, CV_32FC3);
+  for (int row = 0; row < sensor.height_px; ++row) {
     auto* out = radiance.ptr<cv::Vec3f>(row);
-    for (int col = 0; col < camera.width_px; ++col) {
+    for (int col = 0; col < sensor.width_px; ++col) {
       cv::Vec3d sum(0, 0, 0);
       for (int sy = 0; sy < n; ++sy) {
         for (int sx = 0; sx < n; ++sx) {
@@ -636,17 +638,18 @@ cv::Mat FilletRenderer::render_checkerboard(const RenderCamera& camera,
   constexpr double kWhite = 225.0;
   constexpr double kBlack = 30.0;
   constexpr int kSamples = 4;  // per axis: anti-aliased square edges for sub-pixel corners
-  const cv::Matx33d image_to_belt = camera.belt_to_image.inv();
+  const RenderCamera sensor = sensor_of(camera);
+  const cv::Matx33d image_to_belt = sensor.belt_to_image.inv();
   const double c = std::cos(board.yaw_rad);
   const double s = std::sin(board.yaw_rad);
   const double sq = board.square_mm;
   // Squares span board coordinates [-sq, inner * sq] on each axis.
   const double min_x = -sq, max_x = board.inner_corners_x * sq;
   const double min_y = -sq, max_y = board.inner_corners_y * sq;
-  cv::Mat radiance(camera.height_px, camera.width_px, CV_32FC3);
-  for (int row = 0; row < camera.height_px; ++row) {
+  cv::Mat radiance(sensor.height_px, sensor.width_px, CV_32FC3);
+  for (int row = 0; row < sensor.height_px; ++row) {
     auto* out = radiance.ptr<cv::Vec3f>(row);
-    for (int col = 0; col < camera.width_px; ++col) {
+    for (int col = 0; col < sensor.width_px; ++col) {
       cv::Vec3d sum(0, 0, 0);
       for (int sy = 0; sy < kSamples; ++sy) {
         for (int sx = 0; sx < kSamples; ++sx) {

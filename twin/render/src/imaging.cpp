@@ -27,6 +27,29 @@ RenderCamera make_top_down_camera(int width_px, int height_px, double mm_per_px,
   return camera;
 }
 
+RenderCamera make_line_camera(bool binned) {
+  const int binning = binned ? kLineCameraBinning : 1;
+  const int width_px = kLineSensorWidthPx / binning;
+  RenderCamera camera = make_top_down_camera(width_px, kLineSensorHeightPx / binning,
+                                             kLineCameraFieldAlongTravelMm / width_px);
+  camera.binning = binning;
+  return camera;
+}
+
+RenderCamera sensor_of(const RenderCamera& camera) {
+  if (camera.binning < 1) throw std::invalid_argument("RenderCamera: binning < 1");
+  if (camera.binning == 1) return camera;
+  const double b = camera.binning;
+  // Delivered pixel centre p -> sensor pixel b p + (b - 1) / 2, the centre of its block.
+  const double offset = 0.5 * (b - 1.0);
+  const cv::Matx33d delivered_to_sensor(b, 0.0, offset, 0.0, b, offset, 0.0, 0.0, 1.0);
+  RenderCamera sensor;
+  sensor.width_px = camera.width_px * camera.binning;
+  sensor.height_px = camera.height_px * camera.binning;
+  sensor.belt_to_image = delivered_to_sensor * camera.belt_to_image;
+  return sensor;
+}
+
 RenderCamera make_pinhole_camera(int width_px, int height_px, const cv::Matx33d& camera_matrix,
                                  const cv::Matx33d& rotation_camera_from_belt,
                                  const cv::Vec3d& translation_camera_from_belt_mm) {
@@ -95,6 +118,8 @@ namespace detail {
 cv::Mat apply_imaging(const cv::Mat& radiance_bgr, const RenderCamera& camera,
                       const ImagingConditions& imaging, std::uint64_t seed) {
   CV_Assert(radiance_bgr.type() == CV_32FC3);
+  const RenderCamera sensor = sensor_of(camera);
+  CV_Assert(radiance_bgr.cols == sensor.width_px && radiance_bgr.rows == sensor.height_px);
   const int width = radiance_bgr.cols;
   const int height = radiance_bgr.rows;
   cv::Mat image = radiance_bgr.clone();
@@ -123,17 +148,19 @@ cv::Mat apply_imaging(const cv::Mat& radiance_bgr, const RenderCamera& camera,
   }
 
   // Motion blur: a line kernel along the image direction of belt travel.
-  if (imaging.motion_blur_px > 0.5) {
-    const cv::Point2d origin = belt_to_pixel(camera, {0.0, 0.0});
-    const cv::Point2d ahead = belt_to_pixel(camera, {10.0, 0.0});
+  // The blur length is given in delivered pixels; on the sensor it spans binning times as many.
+  const double blur_px = imaging.motion_blur_px * camera.binning;
+  if (blur_px > 0.5) {
+    const cv::Point2d origin = belt_to_pixel(sensor, {0.0, 0.0});
+    const cv::Point2d ahead = belt_to_pixel(sensor, {10.0, 0.0});
     const double angle = std::atan2(ahead.y - origin.y, ahead.x - origin.x);
-    const int size = static_cast<int>(std::ceil(imaging.motion_blur_px)) | 1;
+    const int size = static_cast<int>(std::ceil(blur_px)) | 1;
     cv::Mat kernel = cv::Mat::zeros(size, size, CV_32F);
-    const double half = 0.5 * imaging.motion_blur_px;
+    const double half = 0.5 * blur_px;
     constexpr int kSamples = 64;
     const double centre = 0.5 * (size - 1);
     for (int i = 0; i < kSamples; ++i) {
-      const double t = -half + imaging.motion_blur_px * (i + 0.5) / kSamples;
+      const double t = -half + blur_px * (i + 0.5) / kSamples;
       const int kx = static_cast<int>(std::lround(centre + t * std::cos(angle)));
       const int ky = static_cast<int>(std::lround(centre + t * std::sin(angle)));
       if (kx >= 0 && kx < size && ky >= 0 && ky < size) kernel.at<float>(ky, kx) += 1.0F;
@@ -150,7 +177,10 @@ cv::Mat apply_imaging(const cv::Mat& radiance_bgr, const RenderCamera& camera,
   }
   cv::Mat out;
   image.convertTo(out, CV_8UC3);  // rounds and saturates to 0..255
-  return out;
+  if (camera.binning == 1) return out;
+  cv::Mat binned;
+  cv::resize(out, binned, cv::Size(camera.width_px, camera.height_px), 0.0, 0.0, cv::INTER_AREA);
+  return binned;
 }
 
 }  // namespace detail

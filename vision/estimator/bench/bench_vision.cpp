@@ -1,6 +1,7 @@
 // Estimator time per frame, single thread (cv::setNumThreads(1)), at 640 x 480, at the line
-// cameras' 1280 x 1024 and at the recordings' 320 x 240, on rendered frames with one fillet (or a
-// touching pair) and realistic noise. Run with repetitions to get the spread, e.g.
+// cameras' 640 x 512 (their 1280 x 1024 sensor binned 2 x 2, as mounted) and full 1280 x 1024
+// readout, and at the recordings' 320 x 240, on rendered frames with one fillet (or a touching
+// pair) and realistic noise. Run with repetitions to get the spread, e.g.
 //   build/release/vision/estimator/bench_vision --benchmark_counters_tabular=true
 // Each estimate benchmark reports the median and p99 of the per-frame times as counters (ms);
 // the stage benchmark (BM_WorkingPlanesFrom1280x1024) the mean only.
@@ -90,12 +91,11 @@ void run(benchmark::State& state, const RenderCamera& camera, bool pairs) {
 void BM_Estimate640x480(benchmark::State& state) {
   run(state, fl::render::make_top_down_camera(640, 480, 300.0 / 640.0), false);
 }
+void BM_EstimateLineBinned640x512(benchmark::State& state) {
+  run(state, fl::render::make_line_camera(), false);
+}
 void BM_EstimateLine1280x1024(benchmark::State& state) {
-  run(state,
-      fl::render::make_top_down_camera(
-          fl::render::kLineCameraWidthPx, fl::render::kLineCameraHeightPx,
-          fl::render::kLineCameraFieldAlongTravelMm / fl::render::kLineCameraWidthPx),
-      false);
+  run(state, fl::render::make_line_camera(false), false);
 }
 // The resolution of the twin's recordings and the CI replays (0.94 mm/px).
 void BM_Estimate320x240(benchmark::State& state) {
@@ -117,7 +117,7 @@ void BM_WorkingPlanesFrom1280x1024(benchmark::State& state) {
   std::vector<cv::Mat> frames(kFrames);
   cv::RNG rng(1);
   for (cv::Mat& frame : frames) {
-    frame.create(fl::render::kLineCameraHeightPx, fl::render::kLineCameraWidthPx, CV_8UC3);
+    frame.create(fl::render::kLineSensorHeightPx, fl::render::kLineSensorWidthPx, CV_8UC3);
     rng.fill(frame, cv::RNG::UNIFORM, 0, 256);
   }
   const cv::Size work(frames[0].cols / 2, frames[0].rows / 2);
@@ -154,6 +154,7 @@ void BM_WorkingPlanesFrom1280x1024(benchmark::State& state) {
 }
 
 BENCHMARK(BM_Estimate640x480)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+BENCHMARK(BM_EstimateLineBinned640x512)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 BENCHMARK(BM_EstimateLine1280x1024)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 BENCHMARK(BM_EstimatePair640x480)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 BENCHMARK(BM_Estimate320x240)->Unit(benchmark::kMicrosecond)->MinTime(2.0);

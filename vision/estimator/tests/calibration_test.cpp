@@ -419,13 +419,16 @@ TEST(CalibrationYaml, StrictValidationNamesFileAndKey) {
   EXPECT_THROW(load_calibration(temp_file("does_not_exist.yaml")), fl::ConfigError);
 }
 
-// The checked-in line camera file loads and fits the line camera resolution.
+// The checked-in line camera file loads, has the binned line camera's size, and maps its
+// pixels onto the belt as the camera model does: within 0.5 mm (about a pixel) over the image.
 TEST(CalibrationYaml, CheckedInOrientationCameraLoads) {
   const auto calibration =
       load_calibration(std::filesystem::path(FL_SOURCE_DIR) / "config" / "camera_orientation.yaml");
+  const auto camera = render::make_line_camera();
   EXPECT_EQ(calibration.image_width_px, render::kLineCameraWidthPx);
   EXPECT_EQ(calibration.image_height_px, render::kLineCameraHeightPx);
-  EXPECT_NEAR(calibration.mm_per_px_at_centre(), 300.0 / 1280.0, 0.003);
+  EXPECT_NEAR(calibration.mm_per_px_at_centre(), 300.0 / 640.0, 0.003);
+  EXPECT_LT(max_error_mm(calibration, camera), 0.5);
 }
 
 }  // namespace

@@ -81,17 +81,21 @@ TEST(FilletEstimator, CleanSweepOverTheFullCircle) {
   }
 }
 
-// Every table 3.1 size, at the line cameras' 1280 x 1024 (processed at half resolution).
+// Every table 3.1 size at the line cameras: binned 2 x 2 to 640 x 512 as mounted (measured as
+// delivered), and the sensor read out in full at 1280 x 1024 (halved to the same working scale).
 TEST(FilletEstimator, LineCameraResolutionAllSizes) {
-  const auto camera = camera_line();
-  FilletEstimator estimator(exact_calibration(camera));
-  EXPECT_EQ(estimator.downscale_factor(), 2);  // 0.234 mm/px -> 0.47 mm/px working
-  for (int size = 0; size < 3; ++size) {
-    const auto frame = renderer().render(
-        camera, one_fillet(-20.0, 10.0, 2.5 - size, size % 2 ? Hand::kLeft : Hand::kRight,
-                           size == 1 ? SideUp::kBone : SideUp::kSkin, size));
-    expect_matches(estimator.estimate(frame.bgr, 0, 0), frame.truth[0], kCleanPositionToleranceMm,
-                   kCleanAngleToleranceRad);
+  for (const bool binned : {true, false}) {
+    const auto camera = binned ? camera_line() : testing::camera_line_full_readout();
+    SCOPED_TRACE(binned ? "binned 640 x 512" : "full readout 1280 x 1024");
+    FilletEstimator estimator(exact_calibration(camera));
+    EXPECT_EQ(estimator.downscale_factor(), binned ? 1 : 2);  // 0.47 mm/px working either way
+    for (int size = 0; size < 3; ++size) {
+      const auto frame = renderer().render(
+          camera, one_fillet(-20.0, 10.0, 2.5 - size, size % 2 ? Hand::kLeft : Hand::kRight,
+                             size == 1 ? SideUp::kBone : SideUp::kSkin, size));
+      expect_matches(estimator.estimate(frame.bgr, 0, 0), frame.truth[0], kCleanPositionToleranceMm,
+                     kCleanAngleToleranceRad);
+    }
   }
 }
 
@@ -105,7 +109,7 @@ TEST(FilletEstimator, LineCameraResolutionAllSizes) {
 // last bits. Green and red read from the wrong place would move redness and side score by
 // whole per cent.
 TEST(FilletEstimator, HalvedInTheColourPassAsWhenResizedFirst) {
-  const auto camera = camera_line();
+  const auto camera = testing::camera_line_full_readout();
   const BeltCalibration full_calibration = exact_calibration(camera);
   FilletEstimator halving(full_calibration);
   ASSERT_EQ(halving.downscale_factor(), 2);

@@ -14,11 +14,9 @@ render::RenderCamera camera_640() {
   return render::make_top_down_camera(640, 480, render::kLineCameraFieldAlongTravelMm / 640.0);
 }
 
-render::RenderCamera camera_line() {
-  return render::make_top_down_camera(
-      render::kLineCameraWidthPx, render::kLineCameraHeightPx,
-      render::kLineCameraFieldAlongTravelMm / render::kLineCameraWidthPx);
-}
+render::RenderCamera camera_line() { return render::make_line_camera(); }
+
+render::RenderCamera camera_line_full_readout() { return render::make_line_camera(false); }
 
 BeltCalibration exact_calibration(const render::RenderCamera& camera) {
   BeltCalibration calibration;

@@ -16,9 +16,12 @@ inline constexpr int kShapeVariants = 8;
 // One renderer for the whole test binary (building its height maps takes a few seconds).
 const render::FilletRenderer& renderer();
 
-// 640 x 480 and the line cameras' 1280 x 1024, both over the line's 300 mm field along travel.
+// 640 x 480 and the line cameras, all over the line's 300 mm field along travel: as mounted,
+// 640 x 512 binned 2 x 2 from the 1280 x 1024 sensor (render::make_line_camera), and the same
+// sensor read out in full.
 render::RenderCamera camera_640();
 render::RenderCamera camera_line();
+render::RenderCamera camera_line_full_readout();
 
 // The calibration a perfect checkerboard procedure would give for a renderer camera.
 BeltCalibration exact_calibration(const render::RenderCamera& camera);

@@ -29,9 +29,10 @@ TwinFrameSource::TwinFrameSource(std::shared_ptr<const render::FilletRenderer> r
                                  std::string camera_name)
     : renderer_(std::move(renderer)), scene_(scene), settings_(settings) {
   if (!renderer_) throw std::invalid_argument("TwinFrameSource needs a renderer");
-  if (settings_.width_px <= 0 || settings_.height_px <= 0 ||
+  if (settings_.width_px <= 0 || settings_.height_px <= 0 || settings_.binning < 1 ||
       !(settings_.field_along_travel_mm > 0.0)) {
-    throw std::invalid_argument("twin camera " + camera_name + ": size and field must be positive");
+    throw std::invalid_argument("twin camera " + camera_name +
+                                ": size, binning and field must be positive");
   }
   const bool across = settings_.mount == SensorMount::kLongSideAcrossTravel;
   const int px_along_travel = across ? settings_.height_px : settings_.width_px;
@@ -39,6 +40,7 @@ TwinFrameSource::TwinFrameSource(std::shared_ptr<const render::FilletRenderer> r
       settings_.width_px, settings_.height_px,
       settings_.field_along_travel_mm / static_cast<double>(px_along_travel),
       across ? 0.5 * std::numbers::pi : 0.0);
+  camera_.binning = settings_.binning;
   calibration_.camera_name = std::move(camera_name);
   calibration_.image_width_px = settings_.width_px;
   calibration_.image_height_px = settings_.height_px;
@@ -65,8 +67,12 @@ std::optional<SourceFrame> TwinFrameSource::next() {
 
 std::string TwinFrameSource::describe() const {
   return "twin camera " + calibration_.camera_name + " (" + std::to_string(settings_.width_px) +
-         " x " + std::to_string(settings_.height_px) + " px over " +
-         std::to_string(settings_.field_along_travel_mm) + " mm along travel, long side " +
+         " x " + std::to_string(settings_.height_px) + " px" +
+         (settings_.binning > 1 ? ", binned " + std::to_string(settings_.binning) + " x " +
+                                      std::to_string(settings_.binning)
+                                : std::string()) +
+         " over " + std::to_string(settings_.field_along_travel_mm) +
+         " mm along travel, long side " +
          (settings_.mount == SensorMount::kLongSideAcrossTravel ? "across" : "along") + ")";
 }
 

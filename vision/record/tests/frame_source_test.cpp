@@ -262,6 +262,54 @@ TEST(TwinFrameSource, LongSideAcrossTravelSeesTheWholeBeltWidth) {
   EXPECT_FALSE(along.last_truth()[0].fully_visible);
 }
 
+// The line cameras as mounted (docs/vision.md): 640 x 512 binned 2 x 2 from the sensor. The
+// frame and the calibration have the delivered size; the calibration maps the delivered
+// pixels, so the estimate lands where the fillet lies, within a pixel (0.47 mm).
+TEST(TwinFrameSource, BinnedCameraDeliversTheBinnedFrameAndItsCalibration) {
+  auto renderer = std::make_shared<render::FilletRenderer>();
+  StaticScene scene;
+  render::FilletInstance fillet;
+  fillet.x_mm = -30.0;
+  fillet.y_mm = 25.0;
+  fillet.angle_rad = -2.0;
+  fillet.hand = Hand::kLeft;
+  fillet.side = SideUp::kBone;
+  scene.fillets_.push_back(fillet);
+  TwinCameraSettings settings;
+  settings.width_px = render::kLineCameraWidthPx;
+  settings.height_px = render::kLineCameraHeightPx;
+  settings.binning = render::kLineCameraBinning;
+  settings.mount = SensorMount::kLongSideAlongTravel;
+  settings.imaging.noise_sigma = 3.0;
+  TwinFrameSource source(renderer, scene, settings, "orientation");
+  EXPECT_EQ(source.camera().binning, 2);
+  EXPECT_EQ(source.calibration().image_width_px, 640);
+  EXPECT_EQ(source.calibration().image_height_px, 512);
+  EXPECT_NE(source.describe().find("binned 2 x 2"), std::string::npos) << source.describe();
+  const auto frame = source.next();
+  ASSERT_TRUE(frame.has_value());
+  EXPECT_EQ(frame->bgr.size(), cv::Size(640, 512));
+  // The same camera geometry as the renderer's line camera: the truth's pixel is the same.
+  const cv::Point2d expected_px = render::belt_to_pixel(render::make_line_camera(), {-30.0, 25.0});
+  ASSERT_EQ(source.last_truth().size(), 1U);
+  EXPECT_NEAR(source.calibration().belt_to_pixel({-30.0, 25.0}).x, expected_px.x, 1e-9);
+  EXPECT_NEAR(source.calibration().belt_to_pixel({-30.0, 25.0}).y, expected_px.y, 1e-9);
+
+  FilletEstimator estimator(source.calibration());
+  EXPECT_EQ(estimator.downscale_factor(), 1);  // delivered at the working scale
+  const CameraFrame measured = estimator.estimate(frame->bgr, frame->time_ns, 1).to_camera_frame();
+  ASSERT_EQ(measured.count, 1);
+  const FilletEstimate& e = measured.estimates[0];
+  EXPECT_NEAR(e.x_mm, -30.0F, 1.5F);  // the evaluation's position p95 is 1.24 mm
+  EXPECT_NEAR(e.y_mm, 25.0F, 1.5F);
+  EXPECT_NEAR(e.angle_rad, -2.0F, 0.035F);  // 2 degrees, issue 4's p95 bound
+  EXPECT_EQ(e.hand, Hand::kLeft);
+  EXPECT_EQ(e.side, SideUp::kBone);
+
+  settings.binning = 0;
+  EXPECT_THROW(TwinFrameSource(renderer, scene, settings, "orientation"), std::invalid_argument);
+}
+
 // Every fillet ground truth calls wholly in view must be one the estimator can judge, or the
 // evaluation counts misses no estimator could avoid (an estimate of a fillet truth calls cut
 // is merely not scored). Truth keeps a 3 px clearance from the edge: with the eval's sensor

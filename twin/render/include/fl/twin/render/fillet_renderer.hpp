@@ -39,24 +39,42 @@
 
 namespace fl::render {
 
-// The line cameras (camera 1, 2 and final: 300 mm field along travel): 1280 x 1024 px, a
-// common 1.3 MP machine-vision sensor, which gives 0.234 mm/px over 300 mm.
-inline constexpr int kLineCameraWidthPx = 1280;
-inline constexpr int kLineCameraHeightPx = 1024;
+// The line cameras (camera 1, 2 and final: 300 mm field along travel): a 1280 x 1024 sensor, a
+// common 1.3 MP machine-vision sensor (0.234 mm/px over 300 mm), set to bin 2 x 2 in the camera.
+// They deliver 640 x 512 px at 0.47 mm/px: the scale the estimator measures at
+// (EstimatorParams::working_mm_per_px), so the link carries a quarter of the pixels and the line
+// PC does not average them down itself (docs/vision.md, "The line cameras").
+inline constexpr int kLineSensorWidthPx = 1280;
+inline constexpr int kLineSensorHeightPx = 1024;
+inline constexpr int kLineCameraBinning = 2;
+inline constexpr int kLineCameraWidthPx = kLineSensorWidthPx / kLineCameraBinning;
+inline constexpr int kLineCameraHeightPx = kLineSensorHeightPx / kLineCameraBinning;
 inline constexpr double kLineCameraFieldAlongTravelMm = 300.0;
 
 struct RenderCamera {
-  int width_px = 640;
+  int width_px = 640;  // the delivered image
   int height_px = 480;
   // Belt millimetres (x, y, 1) -> homogeneous pixel (u right, v down, pixel centres at
-  // integers).
+  // integers) of the delivered image.
   cv::Matx33d belt_to_image = cv::Matx33d::eye();
+  // Sensor pixels averaged into one delivered pixel along each axis (1: none). The sensor has
+  // binning times the delivered size; light, blur and noise are imaged on the sensor's pixels,
+  // and each binning x binning block's 8-bit values are averaged, rounded half up (a camera's
+  // digital binning, and cv::resize INTER_AREA at an integer factor).
+  int binning = 1;
 };
 
 // Looking straight down: belt x (travel) along +u, belt y (left) along -v, the belt origin at
 // the image centre; `yaw_rad` turns the image axes counter-clockwise against the belt's.
 RenderCamera make_top_down_camera(int width_px, int height_px, double mm_per_px,
                                   double yaw_rad = 0.0);
+// The line camera as mounted on the line: top down over kLineCameraFieldAlongTravelMm, binned
+// (kLineCameraWidthPx x kLineCameraHeightPx), or its sensor read out in full (`binned` false:
+// kLineSensorWidthPx x kLineSensorHeightPx).
+RenderCamera make_line_camera(bool binned = true);
+// The sensor behind a binned camera: binning times the size, each delivered pixel's block
+// centred on it. A camera without binning is its own sensor.
+RenderCamera sensor_of(const RenderCamera& camera);
 // Pinhole camera K [r1 r2 t] looking at the belt plane z = 0: `rotation_camera_from_belt` and
 // `translation_camera_from_belt_mm` map belt points (x, y, 0) into camera coordinates.
 RenderCamera make_pinhole_camera(int width_px, int height_px, const cv::Matx33d& camera_matrix,

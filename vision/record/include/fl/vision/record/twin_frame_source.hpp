@@ -37,8 +37,9 @@ class TwinScene {
 enum class SensorMount { kLongSideAlongTravel, kLongSideAcrossTravel };
 
 struct TwinCameraSettings {
-  int width_px = 640;
+  int width_px = 640;  // the delivered frame
   int height_px = 480;
+  int binning = 1;  // sensor pixels averaged per delivered pixel and axis (render::RenderCamera)
   double field_along_travel_mm = 300.0;                    // config/line.yaml's field_of_view_mm
   SensorMount mount = SensorMount::kLongSideAcrossTravel;  // the whole belt width in view
   render::BeltAppearance belt;
