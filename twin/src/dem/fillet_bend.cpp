@@ -1,4 +1,5 @@
-// In-plane bend of a fillet (fl/twin/dem/fillet_bend.hpp).
+// A fillet's spheres against its template: rigid rotation and in-plane bend
+// (fl/twin/dem/fillet_bend.hpp).
 #include "fl/twin/dem/fillet_bend.hpp"
 
 #include <Eigen/Dense>
@@ -14,6 +15,13 @@ constexpr double kLeastHorizontalShare = 0.1;
 constexpr double kLeastAlongSpreadM = 0.002;
 
 }  // namespace
+
+Eigen::Matrix3d TemplateRotationFit::rotation() const {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h_, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
+  return svd.matrixV() * d * svd.matrixU().transpose();
+}
 
 InPlaneBendFit::InPlaneBendFit(const Eigen::Matrix3d& rotation) : rotation_(rotation) {
   const Eigen::Vector2d axis(rotation(0, 0), rotation(1, 0));

@@ -93,9 +93,28 @@ BulkDemConfig load_bulk_dem_config(const std::filesystem::path& file) {
       f.max_fillets = map.read_int<std::uint32_t>("max_fillets", Range::closed(1, 100000));
       map.finish();
     }
+    // Optional: the leveller unit's own belt (bulk_line.yaml); without it one belt runs on.
+    if (root.has("leveller_belt")) {
+      YamlMapReader map = root.map("leveller_belt");
+      BulkLevellerBeltConfig& b = config.leveller_belt;
+      b.present = true;
+      b.from_mm = map.read_double("from_mm", Range::any());
+      b.speed_mps = map.read_double("speed_mps", Range::positive());
+      b.rotor_rpm = map.read_double("rotor_rpm", Range::above(0.0).and_at_most(1000.0));
+      map.finish();
+    }
     root.finish();
   }
   const BulkDemConfig& c = config;
+  if (c.leveller_belt.present) {
+    reader.require(c.gate.x_mm < c.leveller_belt.from_mm &&
+                       c.leveller_belt.from_mm < c.leveller.x_mm - c.leveller.tip_radius_mm,
+                   {"leveller_belt.from_mm", "gate.x_mm", "leveller.x_mm"},
+                   "the leveller's belt must start between the gate and the rotor's tip circle");
+    reader.require(c.leveller_belt.speed_mps <= c.belt.max_speed_mps,
+                   {"leveller_belt.speed_mps", "belt.max_speed_mps"},
+                   "the leveller's belt speed exceeds the belts' maximum");
+  }
   reader.require(
       c.belt.start_mm < c.hopper.back_mm - c.hopper.height_mm * std::tan(c.hopper.back_slope_deg *
                                                                          3.141592653589793 / 180.0),

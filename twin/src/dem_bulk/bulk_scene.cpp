@@ -11,6 +11,7 @@
 #include <string>
 
 #include "fl/report/csv.hpp"
+#include "fl/twin/dem/fillet_bend.hpp"
 #include "fl/twin/dem/fillet_generator.hpp"
 #include "fl/twin/dem/geometry.hpp"
 
@@ -104,11 +105,23 @@ std::shared_ptr<const dem::Model> BulkScene::build_model() {
   spec.domain.upper_m =
       Vec3(x1 + 0.3, hw + 0.1, std::max(height, config_.feeder.drop_height_mm * kMm) + 0.6);
 
-  // Bulk belt: one rectangle whose surface velocity is the belt speed.
+  // Bulk belt: one rectangle whose surface velocity is the belt speed; with the leveller's own
+  // belt, it ends where that one begins.
+  const double bulk_end_x =
+      config_.leveller_belt.present ? config_.leveller_belt.from_mm * kMm : x1;
   {
     dem::MeshWallSpec belt{"bulk_belt", equipment, {}};
-    add_quad(belt, Vec3(x0, -hw, 0.0), Vec3(x1, -hw, 0.0), Vec3(x1, hw, 0.0), Vec3(x0, hw, 0.0));
+    add_quad(belt, Vec3(x0, -hw, 0.0), Vec3(bulk_end_x, -hw, 0.0), Vec3(bulk_end_x, hw, 0.0),
+             Vec3(x0, hw, 0.0));
     wall_belt_ = spec.meshes.size();
+    wall_leveller_belt_ = wall_belt_;
+    spec.meshes.push_back(std::move(belt));
+  }
+  if (config_.leveller_belt.present) {
+    dem::MeshWallSpec belt{"leveller_belt", equipment, {}};
+    add_quad(belt, Vec3(bulk_end_x, -hw, 0.0), Vec3(x1, -hw, 0.0), Vec3(x1, hw, 0.0),
+             Vec3(bulk_end_x, hw, 0.0));
+    wall_leveller_belt_ = spec.meshes.size();
     spec.meshes.push_back(std::move(belt));
   }
   // Hopper: back wall (leaning outwards, lower edge wall_gap over the belt) and the sides from
@@ -167,6 +180,12 @@ std::shared_ptr<const dem::Model> BulkScene::build_model() {
     wall_rotor_ = spec.meshes.size();
     spec.meshes.push_back(std::move(rotor));
   }
+  // The transfer onto the takt belt: a plate across the belt's end, as high as its side walls.
+  if (b.hold_at_discharge) {
+    dem::MeshWallSpec stop{"discharge_stop", equipment, {}};
+    add_fence(stop, x1, -hw, x1, hw, 0.0, b.side_wall_height_mm * kMm);
+    spec.meshes.push_back(std::move(stop));
+  }
   return std::make_shared<const dem::Model>(std::move(spec));
 }
 
@@ -190,6 +209,14 @@ void BulkScene::set_belt_speed_mps(double speed_mps) {
 }
 
 void BulkScene::set_leveller_rpm(double rpm) { leveller_rpm_ = rpm; }
+
+double BulkScene::leveller_belt_speed_mps() const {
+  const BulkLevellerBeltConfig& b = config_.leveller_belt;
+  if (!b.present) return belt_speed_mps();
+  if (transfer_waiting()) return 0.0;
+  return std::clamp(b.speed_mps * leveller_rpm_ / b.rotor_rpm, -config_.belt.max_speed_mps,
+                    config_.belt.max_speed_mps);
+}
 
 double BulkScene::time_s() const { return sim_->state().time_s; }
 
@@ -254,7 +281,11 @@ void BulkScene::control_step(double h_s) {
   const double span_s = std::max(steps, 1.0) * dt;
   const double max_m = config_.gate.cylinder_speed_mmps * kMm * span_s;
   gate.linear_velocity_m_per_s = Vec3(0.0, 0.0, std::clamp(to_go_m, -max_m, max_m) / span_s);
-  s.walls[wall_belt_].surface_velocity_m_per_s = Vec3(belt_speed_mps_, 0.0, 0.0);
+  s.walls[wall_belt_].surface_velocity_m_per_s = Vec3(belt_speed_mps(), 0.0, 0.0);
+  if (wall_leveller_belt_ != wall_belt_) {
+    s.walls[wall_leveller_belt_].surface_velocity_m_per_s =
+        Vec3(leveller_belt_speed_mps(), 0.0, 0.0);
+  }
   // Positive rpm sweeps back: the lowest blade moves upstream (-x), omega along +y.
   s.walls[wall_rotor_].angular_velocity_rad_per_s = Vec3(0.0, leveller_rpm_ * kRpmToRadPerS, 0.0);
   if (steps > 0.0) sim_->step(static_cast<std::size_t>(steps));
@@ -263,6 +294,7 @@ void BulkScene::control_step(double h_s) {
   }
   scan();
   count_and_remove();
+  note_arrivals_at_stop();
   stop_fallen_spheres();
   feed(h_s);
 }
@@ -299,11 +331,13 @@ void BulkScene::count_and_remove() {
       counters_.passed_gate_mass_kg += mass;
       gate_events_.push_back({now, mass});
     }
-    // Past the edge, or fallen off the scene (under the belt plane): out of the engine.
-    if (f.centroid_m.x() > edge_x || f.centroid_m.z() < -0.1) {
+    // Past the edge, or fallen off the scene (under the belt plane): out of the engine. With
+    // the stop plate, only hand_over_front() discharges: a fillet over the plate falls off.
+    const bool discharged = !config_.belt.hold_at_discharge && f.centroid_m.x() > edge_x;
+    if (discharged || f.centroid_m.z() < -0.1) {
       f.remove = true;
       any = true;
-      if (f.centroid_m.x() > edge_x) {
+      if (discharged) {
         ++counters_.discharged;
         counters_.discharged_mass_kg += mass;
         discharge_events_.push_back({now, mass});
@@ -342,6 +376,95 @@ void BulkScene::take_out_removed() {
   scan();
 }
 
+// ---------------------------------------------------------------- level and the transfer
+
+double BulkScene::heap_height_mm(double x_from_mm, double x_to_mm) const {
+  const dem::State& s = sim_->state();
+  const double from_m = x_from_mm * kMm;
+  const double to_m = x_to_mm * kMm;
+  double top_m = 0.0;
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    const std::uint32_t body = s.body[k];
+    // Fillet spheres only: a held fragment under the scene or a loose test sphere is no heap.
+    if (body >= fillet_of_body_.size() || fillet_of_body_[body] < 0) continue;
+    const double x = s.position_m[k].x();
+    if (x < from_m || x > to_m) continue;
+    top_m = std::max(top_m, s.position_m[k].z() + s.radius_m[k]);
+  }
+  return top_m / kMm;
+}
+
+bool BulkScene::at_stop(const Fillet& fillet) const {
+  // Under the belt plane it has fallen off, whatever its x.
+  return config_.belt.hold_at_discharge && !fillet.particles.empty() &&
+         fillet.upper_m.x() >= (config_.belt.discharge_mm - kAtStopMm) * kMm &&
+         fillet.centroid_m.z() >= 0.0;
+}
+
+void BulkScene::note_arrivals_at_stop() {
+  for (Fillet& f : fillets_) {
+    if (f.at_stop_since_s < 0.0 && at_stop(f)) f.at_stop_since_s = time_s();
+  }
+}
+
+const BulkScene::Fillet* BulkScene::front_fillet() const {
+  // Fillets side by side can all press on the plate: the first to arrive leaves first.
+  const Fillet* front = nullptr;
+  for (const Fillet& f : fillets_) {
+    if (!at_stop(f)) continue;
+    if (front == nullptr || f.at_stop_since_s < front->at_stop_since_s ||
+        (f.at_stop_since_s == front->at_stop_since_s && f.id < front->id)) {
+      front = &f;
+    }
+  }
+  return front;
+}
+
+BulkHandover BulkScene::handover_of(const Fillet& fillet) const {
+  const dem::State& s = sim_->state();
+  const dem::FilletTemplate& t = templates_[fillet.variant];
+  dem::TemplateRotationFit fit;
+  for (const std::uint32_t k : fillet.particles) {
+    const std::uint32_t i = s.id[k] - fillet.first_id;
+    if (k >= s.size() || i >= t.positions_m.size()) {
+      // an invariant, not input: particle indices read after a re-order without a rescan
+      throw std::logic_error("bulk scene: fillet " + std::to_string(fillet.id) +
+                             " holds a stale particle index");
+    }
+    fit.add(t.positions_m[i], s.position_m[k] - fillet.centroid_m);
+  }
+  BulkHandover handover;
+  handover.id = fillet.id;
+  handover.variant = fillet.variant;
+  handover.time_s = time_s();
+  handover.centroid_m = fillet.centroid_m;
+  handover.velocity_m_per_s = fillet.velocity_m_per_s;
+  handover.lower_m = fillet.lower_m;
+  handover.upper_m = fillet.upper_m;
+  handover.rotation = fit.rotation();
+  return handover;
+}
+
+std::optional<BulkHandover> BulkScene::front_at_discharge() const {
+  const Fillet* front = front_fillet();
+  if (front == nullptr) return std::nullopt;
+  return handover_of(*front);
+}
+
+std::optional<BulkHandover> BulkScene::hand_over_front() {
+  const Fillet* front = front_fillet();
+  if (front == nullptr) return std::nullopt;
+  BulkHandover handover = handover_of(*front);
+  Fillet& leaving = fillets_[static_cast<std::size_t>(front - fillets_.data())];
+  leaving.remove = true;
+  const double mass = template_mass_kg_[leaving.variant];
+  ++counters_.discharged;
+  counters_.discharged_mass_kg += mass;
+  discharge_events_.push_back({time_s(), mass});
+  take_out_removed();
+  return handover;
+}
+
 // ------------------------------------------------------------------------------ feeding
 
 double BulkScene::uniform() {
@@ -362,12 +485,14 @@ std::uint32_t BulkScene::add_fillet(std::uint8_t variant, const Vec3& centroid_m
   pose.position_m = centroid_m;
   pose.orientation = orientation;
   pose.velocity_m_per_s = velocity_m_per_s;
+  const std::size_t first = sim_->state().size();
   const std::uint32_t body =
       sim_->add_body(t.positions_m, t.radii_m, t.types, template_bonds_[variant], pose);
   Fillet f;
   f.id = ++last_id_;
   f.variant = variant;
   f.body = body;
+  f.first_id = sim_->state().id[first];
   f.centroid_m = centroid_m;
   f.passed_gate = centroid_m.x() >= config_.gate.x_mm * kMm;
   if (fillet_of_body_.size() <= body) fillet_of_body_.resize(body + 1, -1);

@@ -10,12 +10,16 @@
 // Fillets are the thesis' bonded meta-particles (six variants, fillet_generator.hpp) with the
 // appendix-B laws of config/dem.yaml; they are dropped into the hopper in random poses from a
 // seeded generator, as an initial fill and/or at a rate, and taken out of the engine once their
-// centroid is past the discharge edge.
+// centroid is past the discharge edge. As the DEM plant's infeed (BulkBeltConfig::
+// hold_at_discharge) the belt that reaches the discharge edge stops while a fillet waits at the
+// edge, as an accumulating transfer does at a photo-eye, and a stop plate backs it up: the
+// fillet leaves only when the takt belt downstream takes it (hand_over_front()).
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -42,6 +46,13 @@ struct BulkBeltConfig {
   double speed_mps = 0.2;        // initial command
   double max_speed_mps = 1.0;    // line.yaml drives.bulk.max_speed_mps
   double side_wall_height_mm = 100.0;
+  // Set by the DEM plant, not read from the file: the transfer onto the takt belt. The belt
+  // that reaches the discharge edge stops while a fillet is at the edge (a photo-eye
+  // interlock: the fillet waits still, and the ones behind it queue on the stopped belt), and
+  // a plate across the edge stops whatever slides on. Fillets leave only through
+  // hand_over_front(). A plate alone, with the belt slipping under the waiting fillets, turned
+  // them crosswise (70 to 90 degrees off the travel for most of them).
+  bool hold_at_discharge = false;
 };
 
 struct BulkHopperConfig {
@@ -69,6 +80,19 @@ struct BulkLevellerConfig {
   int hub_segments = 16;
 };
 
+// The universal leveller's own conveyor (optional; thesis 5.3: "the fillets descend onto a
+// secondary conveyor, traversing beneath the universal leveller"): the belt from from_mm to the
+// discharge edge is a second belt, turning with the rotor (one drive: speed_mps when the rotor
+// turns at rotor_rpm, in proportion otherwise). The level sensor then regulates only the bulk
+// belt under the hopper, and the levelled layer keeps leaving while the heap is held. Without
+// it one belt runs from start to discharge at the bulk belt's speed.
+struct BulkLevellerBeltConfig {
+  bool present = false;
+  double from_mm = 150.0;    // the bulk belt's end: between the gate and the rotor's tip circle
+  double speed_mps = 0.15;   // at rotor_rpm
+  double rotor_rpm = 120.0;  // line.yaml leveller.speed_rpm
+};
+
 struct BulkFeederConfig {
   std::uint32_t initial_fill = 12;  // fillets placed in the hopper at construction
   double rate_per_s = 0.0;          // further fillets dropped per second (0: none)
@@ -84,6 +108,7 @@ struct BulkDemConfig {
   BulkHopperConfig hopper;
   BulkGateConfig gate;
   BulkLevellerConfig leveller;
+  BulkLevellerBeltConfig leveller_belt;
   BulkFeederConfig feeder;
 };
 
@@ -104,11 +129,25 @@ struct BulkFilletView {
   bool passed_gate = false;
 };
 
+// A fillet leaving the scene through the stop plate at the discharge edge (hand_over_front()).
+struct BulkHandover {
+  std::uint32_t id = 0;
+  std::uint8_t variant = 0;  // thesis_fillet_variants() order
+  double time_s = 0.0;
+  dem::Vec3 centroid_m = dem::Vec3::Zero();
+  dem::Vec3 velocity_m_per_s = dem::Vec3::Zero();
+  dem::Vec3 lower_m = dem::Vec3::Zero();  // bounding box of its spheres
+  dem::Vec3 upper_m = dem::Vec3::Zero();
+  // Template to world: the rigid fit of its template to its spheres (dem::TemplateRotationFit);
+  // column 0 is its heading (thick end to tip), entry (2, 2) > 0 means skin side up.
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+};
+
 struct BulkCounters {
   std::uint64_t fed = 0;
   std::uint64_t passed_gate = 0;  // centroid crossed the gate's plane downstream
   double passed_gate_mass_kg = 0.0;
-  std::uint64_t discharged = 0;  // centroid past the discharge edge (removed)
+  std::uint64_t discharged = 0;  // centroid past the discharge edge, or handed over (removed)
   double discharged_mass_kg = 0.0;
   std::uint64_t lost = 0;  // fell off the scene (centroid under the belt plane; removed)
   // Broken bonds that left with removed fillets: with the engine's broken bonds now, the
@@ -157,7 +196,14 @@ class BulkScene {
   [[nodiscard]] double gate_lower_edge_z_m() const;      // from the placed gate mesh
   [[nodiscard]] double leveller_lowest_tip_z_m() const;  // lowest blade tip now
   [[nodiscard]] double leveller_angle_rad() const;
-  [[nodiscard]] double belt_speed_mps() const { return belt_speed_mps_; }
+  [[nodiscard]] double belt_speed_mps() const {
+    return wall_leveller_belt_ == wall_belt_ && transfer_waiting() ? 0.0 : belt_speed_mps_;
+  }
+  // The leveller unit's belt (BulkLevellerBeltConfig); the bulk belt's speed without one.
+  // Either is 0 while the transfer holds a fillet at the discharge edge (hold_at_discharge).
+  [[nodiscard]] double leveller_belt_speed_mps() const;
+  // A fillet waits at the discharge edge (hold_at_discharge): the belt there is stopped.
+  [[nodiscard]] bool transfer_waiting() const { return front_fillet() != nullptr; }
   [[nodiscard]] double leveller_rpm() const { return leveller_rpm_; }
   [[nodiscard]] const dem::Simulation& simulation() const { return *sim_; }
   [[nodiscard]] const std::vector<dem::FilletTemplate>& templates() const { return templates_; }
@@ -180,12 +226,28 @@ class BulkScene {
   [[nodiscard]] LevellerLoad leveller_load() const;
   // Mean of leveller_load() over the control steps of the last step() call.
   [[nodiscard]] LevellerLoad leveller_load_mean() const { return load_mean_; }
+  // A level sensor over the belt: the highest sphere top (centre z + radius) of any fillet
+  // sphere whose centre lies in x_from_mm..x_to_mm, across the whole belt, as a laser line
+  // across the belt sees the heap; 0 over a bare belt. Millimetres over the belt surface.
+  [[nodiscard]] double heap_height_mm(double x_from_mm, double x_to_mm) const;
+
+  // ---- the transfer at the discharge edge (hold_at_discharge)
+  // The fillet that reached the stop plate first (its leading edge within kAtStopMm of it) of
+  // those there now; none while no fillet is. Always none without the stop plate.
+  [[nodiscard]] std::optional<BulkHandover> front_at_discharge() const;
+  // Takes that fillet out of the scene and counts it discharged; none if there is none.
+  std::optional<BulkHandover> hand_over_front();
+  // How close to the stop plate a fillet's leading edge must come to count as at it: soft
+  // contact, JKR adhesion and the belt pushing leave it a fraction of a sphere from the plate.
+  static constexpr double kAtStopMm = 5.0;
 
  private:
   struct Fillet : dem::SphereGroup {
     std::uint32_t id = 0;
     std::uint8_t variant = 0;
     std::uint32_t body = 0;
+    std::uint32_t first_id = 0;     // engine id of template sphere 0
+    double at_stop_since_s = -1.0;  // when it first reached the stop plate; < 0: not yet
     bool passed_gate = false;
     bool remove = false;
   };
@@ -203,6 +265,10 @@ class BulkScene {
   void take_out_removed();
   void feed(double h_s);
   bool drop_random_fillet(const dem::Vec3& centre_m);
+  void note_arrivals_at_stop();
+  [[nodiscard]] bool at_stop(const Fillet& fillet) const;
+  [[nodiscard]] const Fillet* front_fillet() const;
+  [[nodiscard]] BulkHandover handover_of(const Fillet& fillet) const;
   void initial_fill();
   double uniform();  // [0, 1), portable (own bits, no std distribution)
   [[nodiscard]] double rate(const std::vector<Event>& events, double window_s, bool mass) const;
@@ -217,6 +283,7 @@ class BulkScene {
   std::vector<std::int32_t> fillet_of_body_;
   std::vector<dem::Triangle> rotor_reference_;  // blades and hub, unmoved
   std::size_t wall_belt_ = 0, wall_gate_ = 0, wall_rotor_ = 0;
+  std::size_t wall_leveller_belt_ = 0;  // == wall_belt_ without a leveller belt
   std::uint64_t rng_state_ = 0;
   std::uint32_t last_id_ = 0;
   double gate_target_mm_ = 0.0;
