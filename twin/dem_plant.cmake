@@ -1,15 +1,18 @@
 # DEM plant (issue 3, item 5): the DEM twin behind the controller's plant interface.
 # Library fl_twin_dem_plant, tests twin_dem_plant_tests. Included from twin/CMakeLists.txt.
 file(GLOB FL_TWIN_DEM_PLANT_SOURCES CONFIGURE_DEPENDS ${CMAKE_CURRENT_LIST_DIR}/src/dem_plant/*.cpp)
-if(NOT FL_TWIN_DEM_PLANT_SOURCES OR NOT TARGET fl_twin_dem OR NOT TARGET fl_twin_fast)
+if(NOT FL_TWIN_DEM_PLANT_SOURCES OR NOT TARGET fl_twin_dem OR NOT TARGET fl_twin_fast
+   OR NOT TARGET fl_twin_dem_bulk)
   return()
 endif()
 add_library(fl_twin_dem_plant STATIC ${FL_TWIN_DEM_PLANT_SOURCES})
 target_include_directories(fl_twin_dem_plant PUBLIC ${CMAKE_CURRENT_LIST_DIR}/include)
 # fl_twin_fast for the shared plant_fast.yaml loader; fl_twin_sensors for the drive and camera
 # emulators both plants use.
+# fl_twin_dem_bulk for the bulk end as a DEM scene, one of the two infeeds.
 target_link_libraries(fl_twin_dem_plant PUBLIC fl_twin_dem fl_twin_fillet fl_twin_sensors fl_twin_fast
-                                               fl_controller_config PRIVATE fl_build_flags)
+                                               fl_twin_dem_bulk fl_controller_config
+                                        PRIVATE fl_build_flags)
 
 if(FL_BUILD_TESTS)
   file(GLOB FL_TWIN_DEM_PLANT_TEST_SOURCES CONFIGURE_DEPENDS
@@ -19,6 +22,14 @@ if(FL_BUILD_TESTS)
     target_link_libraries(twin_dem_plant_tests PRIVATE fl_twin_dem_plant fl_closed_loop
                                                        fl_build_flags GTest::gtest_main)
     target_compile_definitions(twin_dem_plant_tests PRIVATE FL_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
-    gtest_discover_tests(twin_dem_plant_tests DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300)
+    # The bulk end's handover and closed-loop runs take 10 to 20 s of line time each (about
+    # half real time here, several times that under the sanitizers): label slow, so the
+    # sanitizer run leaves them to release.
+    set(FL_DEM_PLANT_SLOW_TESTS
+        "DemPlantBulkEnd.HandedOverFilletsKeepVariantSideHeadingAndPlace:DemPlantBulkEnd.ClosedLoopFeedsTheLineFromTheHopper")
+    gtest_discover_tests(twin_dem_plant_tests TEST_FILTER "-${FL_DEM_PLANT_SLOW_TESTS}"
+                         DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300)
+    gtest_discover_tests(twin_dem_plant_tests TEST_FILTER "${FL_DEM_PLANT_SLOW_TESTS}"
+                         DISCOVERY_TIMEOUT 60 PROPERTIES LABELS slow TIMEOUT 300)
   endif()
 endif()

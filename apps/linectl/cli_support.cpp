@@ -76,14 +76,24 @@ std::optional<RunTimes> parse_run_times(const std::string& duration, const std::
 }
 
 std::unique_ptr<Plant> make_plant(const std::string& name, const std::string& plant_config,
-                                  const LineConfig& line) {
+                                  const LineConfig& line, const std::string& infeed) {
+  if (!infeed.empty() && name != "dem") {
+    throw std::runtime_error("--infeed " + infeed + ": only the dem plant has a choice of infeed");
+  }
   if (name == "fast") {
     return std::make_unique<FastPlant>(
         line, load_fast_plant_config(config_or_default(plant_config, "plant_fast.yaml")));
   }
   if (name == "dem") {
-    return std::make_unique<DemPlant>(
-        line, load_dem_plant_config(config_or_default(plant_config, "plant_dem.yaml")));
+    DemPlantConfig config =
+        load_dem_plant_config(config_or_default(plant_config, "plant_dem.yaml"));
+    if (infeed == "levelled_layer") config.feeder.source = DemInfeedSource::kLevelledLayer;
+    if (infeed == "dem_bulk_end") config.feeder.source = DemInfeedSource::kDemBulkEnd;
+    if (!infeed.empty() && infeed != "levelled_layer" && infeed != "dem_bulk_end") {
+      throw std::runtime_error("--infeed " + infeed +
+                               ": unknown infeed (choose levelled_layer or dem_bulk_end)");
+    }
+    return std::make_unique<DemPlant>(line, config);
   }
   throw std::runtime_error("--plant " + name + ": unknown plant (choose fast or dem)");
 }

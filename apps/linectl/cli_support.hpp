@@ -53,10 +53,12 @@ struct RunTimes {
 std::optional<RunTimes> parse_run_times(const std::string& duration, const std::string& wait,
                                         const std::string& drain, bool allow_forever = false);
 
-// "fast" or "dem"; an empty plant_config takes the plant's default file. Throws
-// std::runtime_error for an unknown name and ConfigError for a bad file.
+// "fast" or "dem"; an empty plant_config takes the plant's default file. `infeed` (dem only;
+// empty: the file's feeder.source) is levelled_layer or dem_bulk_end. Throws
+// std::runtime_error for an unknown name or an infeed for the fast plant, and ConfigError for
+// a bad file.
 std::unique_ptr<Plant> make_plant(const std::string& name, const std::string& plant_config,
-                                  const LineConfig& line);
+                                  const LineConfig& line, const std::string& infeed = {});
 
 // Reads the plant's configuration file (the default one when plant_config is empty) without
 // building the plant; the same errors as make_plant.

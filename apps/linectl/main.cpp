@@ -57,6 +57,7 @@ struct RunArgs {
   std::uint64_t seed = 1;
   std::string config;        // empty: line.yaml from the configuration search path
   std::string plant_config;  // empty: the plant's own file from the search path
+  std::string infeed;        // --plant dem: levelled_layer or dem_bulk_end (empty: the file's)
   std::string json_path;
   std::string ledger_path;
   bool realtime = false;
@@ -86,6 +87,11 @@ int run_command(const RunArgs& args) {
     spdlog::error("--hmi needs --realtime (the HMI shows a line running in real time)");
     return 2;
   }
+  if (!args.infeed.empty() && args.plant != "dem") {
+    spdlog::error("--infeed {} needs --plant dem (the fast plant has one infeed model)",
+                  args.infeed);
+    return 2;
+  }
   if (!std::isfinite(*duration_s) && !args.realtime) {
     spdlog::error("--duration forever needs --realtime (a lock-step run would never end)");
     return 2;
@@ -93,7 +99,7 @@ int run_command(const RunArgs& args) {
   const std::filesystem::path config =
       args.config.empty() ? default_config("line.yaml") : std::filesystem::path(args.config);
   const LineConfig line = load_line_config(config);
-  std::unique_ptr<Plant> inner_plant = make_plant(args.plant, args.plant_config, line);
+  std::unique_ptr<Plant> inner_plant = make_plant(args.plant, args.plant_config, line, args.infeed);
   // --fieldbus canopen: every drive and I/O signal through the CANopen master and the
   // plant-backed emulated devices on an in-process bus (fl/drivers/line_devices.hpp).
   std::unique_ptr<fl::drivers::CanopenPlant> canopen_plant;
@@ -195,6 +201,11 @@ int main(int argc, char** argv) {
                   "configuration folder or the source tree)");
   run->add_option("--plant-config", run_args.plant_config,
                   "the plant's configuration (YAML; default plant_fast.yaml or plant_dem.yaml)");
+  run->add_option("--infeed", run_args.infeed,
+                  "--plant dem: what feeds the takt belt, levelled_layer (plant_fast.yaml's "
+                  "model) or dem_bulk_end (hopper, bulk belt and leveller as DEM; about half "
+                  "real time); default: plant_dem.yaml's feeder.source")
+      ->check(CLI::IsMember({"levelled_layer", "dem_bulk_end"}));
   run->add_option("--json", run_args.json_path, "write the KPIs as JSON to this file");
   run->add_option("--ledger", run_args.ledger_path, "write every ledger record as CSV");
   run->add_flag("--realtime", run_args.realtime, "run on the 10 ms real-time schedule");

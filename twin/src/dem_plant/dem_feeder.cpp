@@ -1,9 +1,14 @@
-// Feeder of the DEM plant. Simplification of mailbox hopper, bulk belt and leveller (their
-// flow is not simulated with particles): the hopper's outflow, bulk speed x opening as in the
-// fast plant, fills a backlog counted in fillets in front of the leveller; the level sensor
-// reads the backlog as heap height. A running leveller hands the next fillet (or touching
-// pair) to the takt belt's upstream end when there is room behind the last one, at the takt
-// belt's speed: the levelled layer the fast plant feeds, here as DEM bodies.
+// Feeders of the DEM plant: what puts fillets on the takt belt's upstream end
+// (DemFeederConfig::source).
+// - levelled_layer: a simplification of mailbox hopper, bulk belt and leveller (their flow is
+//   not simulated with particles). The hopper's outflow, bulk speed x opening as in the fast
+//   plant, fills a backlog counted in fillets in front of the leveller; the level sensor reads
+//   the backlog as heap height. A running leveller hands the next fillet (or touching pair) to
+//   the takt belt's upstream end when there is room behind the last one, at the takt belt's
+//   speed: the levelled layer the fast plant feeds, here as DEM bodies.
+// - dem_bulk_end: the hopper, bulk belt and leveller as a DEM scene (BulkScene), driven by the
+//   same commands; its fillets gather at a stop plate at the scene's end and move onto the
+//   takt belt one by one.
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -14,6 +19,11 @@ namespace fl {
 namespace {
 
 constexpr double kMm = 1e-3;
+// A handed-over fillet's centroid is placed this far past the takt belt's upstream end beyond
+// its own half extent, as a spawned one is.
+constexpr double kEntryMarginM = 0.002;
+// A fillet is placed this far inside the side walls.
+constexpr double kWallClearanceMm = 5.0;
 
 }  // namespace
 
@@ -34,6 +44,53 @@ void DemPlant::draw_next_feed() {
 
 void DemPlant::step_infeed(double h_s, const OutputImage& out) {
   const FastInfeedConfig& config = config_.shared.infeed;
+  // The leveller's motor: the same lag whichever rotor it turns.
+  const double rpm_target =
+      faults_.estop_open ? 0.0 : std::max(0.0, static_cast<double>(out.leveller_speed_rpm));
+  const double tau_s = std::max(static_cast<double>(config.leveller_time_constant_s), 1e-6);
+  infeed_.leveller_rpm += (rpm_target - infeed_.leveller_rpm) * (1.0 - std::exp(-h_s / tau_s));
+  if (bulk_) {
+    step_bulk_end(out);
+  } else {
+    step_layer_infeed(h_s, out);
+  }
+}
+
+std::optional<double> DemPlant::entry_room_m(const dem::FilletTemplate& t, double angle_rad,
+                                             double gap_m, std::optional<double> y_mm) const {
+  // Room at the upstream end: the extent of the new fillet along the belt plus its gap; with
+  // its place across given, beside a fillet that is clear of it across (plus the gap) too.
+  const double c = std::abs(std::cos(angle_rad));
+  const double sn = std::abs(std::sin(angle_rad));
+  const double half_s_m = t.half_extent_m.x() * c + t.half_extent_m.y() * sn;
+  const double half_y_m = t.half_extent_m.x() * sn + t.half_extent_m.y() * c;
+  const double entry_m = -static_cast<double>(line_.takt_belt_length_mm) * kMm;
+  const double needed_m = entry_m + 2.0 * half_s_m + gap_m;
+  for (const Fillet& f : fillets_) {
+    if (f.lower_m.x() >= needed_m) continue;
+    if (y_mm && (f.lower_m.y() > *y_mm * kMm + half_y_m + gap_m ||
+                 f.upper_m.y() < *y_mm * kMm - half_y_m - gap_m)) {
+      continue;
+    }
+    return std::nullopt;
+  }
+  return entry_m + half_s_m + kEntryMarginM;
+}
+
+double DemPlant::entry_y_mm(const dem::FilletTemplate& t, double angle_rad, double y_mm,
+                            bool pair) const {
+  // Its extent across the belt at its heading; a pair's partner lies beside it to the left.
+  const double half_w_mm = config_.machinery.belt_half_width_mm;
+  const double half_y_mm = (t.half_extent_m.x() * std::abs(std::sin(angle_rad)) +
+                            t.half_extent_m.y() * std::abs(std::cos(angle_rad))) /
+                           kMm;
+  const double partner_mm = pair ? 2.0 * t.half_extent_m.y() / kMm : 0.0;
+  return std::clamp(y_mm, -half_w_mm + half_y_mm + kWallClearanceMm,
+                    half_w_mm - half_y_mm - partner_mm - kWallClearanceMm);
+}
+
+void DemPlant::step_layer_infeed(double h_s, const OutputImage& out) {
+  const FastInfeedConfig& config = config_.shared.infeed;
   const double opening_target_mm = std::clamp(static_cast<double>(out.hopper_opening_mm),
                                               static_cast<double>(config.hopper_min_opening_mm),
                                               static_cast<double>(config.hopper_max_opening_mm));
@@ -45,10 +102,6 @@ void DemPlant::step_infeed(double h_s, const OutputImage& out) {
     infeed_.backlog_fillets +=
         config.outflow_fillets_per_m_mm * bulk_mps * infeed_.hopper_opening_mm * h_s;
   }
-  const double rpm_target =
-      faults_.estop_open ? 0.0 : std::max(0.0, static_cast<double>(out.leveller_speed_rpm));
-  const double tau_s = std::max(static_cast<double>(config.leveller_time_constant_s), 1e-6);
-  infeed_.leveller_rpm += (rpm_target - infeed_.leveller_rpm) * (1.0 - std::exp(-h_s / tau_s));
 
   const NextFeed& next = next_feed_;
   const double members = next.pair ? 2.0 : 1.0;
@@ -56,25 +109,12 @@ void DemPlant::step_infeed(double h_s, const OutputImage& out) {
     return;
   }
   if (fillets_.size() + (next.pair ? 2U : 1U) > config_.simulation.max_fillets) return;
-  // Room at the upstream end: the extent of the new fillet along the belt plus its gap.
   const dem::FilletTemplate& t = templates_[next.variant];
-  const double c = std::abs(std::cos(next.angle_rad));
-  const double sn = std::abs(std::sin(next.angle_rad));
-  const double half_s_m = t.half_extent_m.x() * c + t.half_extent_m.y() * sn;
-  const double entry_m = -static_cast<double>(line_.takt_belt_length_mm) * kMm;
-  const double needed_m = entry_m + 2.0 * half_s_m + next.gap_mm * kMm;
-  for (const Fillet& f : fillets_) {
-    if (f.lower_m.x() < needed_m) return;
-  }
-  // Keep it (and a pair's partner, to its left) clear of the side walls. The template's
-  // half extent across is the worst case for any heading near 0 or pi.
-  const double half_w_mm = config_.machinery.belt_half_width_mm;
-  const double half_y_mm = t.half_extent_m.y() / kMm;
-  const double y_mm = std::clamp(next.y_mm, -half_w_mm + half_y_mm + 5.0,
-                                 half_w_mm - half_y_mm - (next.pair ? 2.0 * half_y_mm : 0.0) - 5.0);
+  const std::optional<double> s_m = entry_room_m(t, next.angle_rad, next.gap_mm * kMm);
+  if (!s_m) return;
   DemFilletSpawn spawn;
-  spawn.s_mm = (entry_m + half_s_m + 0.002) / kMm;
-  spawn.y_mm = y_mm;
+  spawn.s_mm = *s_m / kMm;
+  spawn.y_mm = entry_y_mm(t, next.angle_rad, next.y_mm, next.pair);
   spawn.angle_rad = next.angle_rad;
   spawn.v_mps = drives_.speed_mps(DriveId::kTakt);
   spawn.variant = next.variant;
@@ -84,6 +124,73 @@ void DemPlant::step_infeed(double h_s, const OutputImage& out) {
     infeed_.backlog_fillets -= members;
     draw_next_feed();
   }
+}
+
+void DemPlant::start_bulk_end(std::uint64_t seed) {
+  BulkDemConfig config = config_.bulk_end;
+  config.belt.hold_at_discharge = true;
+  // Its own stream of fillet poses from the plant's seed; the commands start it.
+  config.simulation.seed = stream_seed(seed, 4);
+  config.belt.speed_mps = 0.0;
+  config.leveller.speed_rpm = 0.0;
+  config.gate.opening_mm =
+      std::clamp(infeed_.hopper_opening_mm, config.gate.min_opening_mm, config.gate.max_opening_mm);
+  bulk_ = std::make_unique<BulkScene>(config);
+  last_handover_.reset();
+  bulk_due_ns_ = std::max<std::int64_t>(1, std::llround(config.simulation.control_step_s * 1e9));
+  infeed_.hopper_opening_mm = bulk_->gate_opening_mm();
+}
+
+void DemPlant::step_bulk_end(const OutputImage& out) {
+  const FastInfeedConfig& config = config_.shared.infeed;
+  // The cylinder's end stops are the line's; the scene moves the gate at its own speed.
+  bulk_->set_gate_opening_mm(std::clamp(static_cast<double>(out.hopper_opening_mm),
+                                        static_cast<double>(config.hopper_min_opening_mm),
+                                        static_cast<double>(config.hopper_max_opening_mm)));
+  bulk_->set_belt_speed_mps(drives_.speed_mps(DriveId::kBulk));
+  bulk_->set_leveller_rpm(infeed_.leveller_rpm);
+  // Whole control steps of the scene up to the plant's time (checked at load: its step is a
+  // whole number of the plant's).
+  const double scene_step_s = bulk_->config().simulation.control_step_s;
+  const std::int64_t scene_step_ns = std::max<std::int64_t>(1, std::llround(scene_step_s * 1e9));
+  while (bulk_due_ns_ <= time_ns_) {
+    bulk_->step(scene_step_s);
+    bulk_due_ns_ += scene_step_ns;
+  }
+  infeed_.hopper_opening_mm = bulk_->gate_opening_mm();
+
+  // The transfer: the fillet at the stop plate moves onto the takt belt when there is room.
+  const std::optional<BulkHandover> front = bulk_->front_at_discharge();
+  if (!front || fillets_.size() + 1U > config_.simulation.max_fillets) return;
+  const Eigen::Matrix3d& r = front->rotation;
+  const double angle_rad = wrap_angle_rad(std::atan2(r(1, 0), r(0, 0)));
+  const dem::FilletTemplate& t = templates_[front->variant];
+  // Where it lay across the leveller's belt: fillets side by side there go on side by side.
+  const double y_mm = entry_y_mm(t, angle_rad, front->centroid_m.y() / kMm, false);
+  const std::optional<double> s_m =
+      entry_room_m(t, angle_rad, static_cast<double>(config_.feeder.handover_gap_mm) * kMm, y_mm);
+  if (!s_m) return;
+  DemFilletSpawn spawn;
+  spawn.s_mm = *s_m / kMm;
+  spawn.y_mm = y_mm;
+  spawn.angle_rad = angle_rad;
+  spawn.v_mps = drives_.speed_mps(DriveId::kTakt);
+  spawn.variant = front->variant;
+  spawn.side = r(2, 2) >= 0.0 ? SideUp::kSkin : SideUp::kBone;
+  const std::optional<std::uint32_t> plant_id = spawn_fillet(spawn);
+  if (plant_id) {
+    (void)bulk_->hand_over_front();
+    ++counters_.handed_over;
+    last_handover_ = Handover{*front, *plant_id};
+  }
+}
+
+double DemPlant::level_mm() {
+  const FastInfeedConfig& infeed = config_.shared.infeed;
+  const double heap_mm = bulk_ ? bulk_->heap_height_mm(config_.feeder.level_sensor_from_mm,
+                                                       config_.feeder.level_sensor_to_mm)
+                               : infeed_.backlog_fillets * infeed.layer_mm_per_fillet;
+  return std::max(0.0, heap_mm + static_cast<double>(infeed.level_noise_mm) * sensor_rng_.normal());
 }
 
 }  // namespace fl

@@ -266,6 +266,11 @@ void DemPlant::reset(std::uint64_t seed, InputImage& in) {
   infeed_.hopper_opening_mm = std::clamp(static_cast<double>(infeed.hopper_initial_opening_mm),
                                          static_cast<double>(infeed.hopper_min_opening_mm),
                                          static_cast<double>(infeed.hopper_max_opening_mm));
+  if (config_.feeder.source == DemInfeedSource::kDemBulkEnd) {
+    start_bulk_end(seed);
+  } else {
+    bulk_.reset();
+  }
   draw_next_feed();
   std::memset(static_cast<void*>(&image_), 0, sizeof(image_));
   cameras_.reset(seed, time_ns_);
@@ -349,7 +354,7 @@ DemPlant::Pose DemPlant::fit_pose(const Fillet& fillet) const {
   // Least-squares rotation of the template onto the spheres (Kabsch): H = sum p (x - c)^T.
   const dem::State& s = sim_->state();
   const dem::FilletTemplate& t = templates_[fillet.variant];
-  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  dem::TemplateRotationFit fit;
   for (const std::uint32_t k : fillet.particles) {
     const std::uint32_t i = s.id[k] - fillet.first_id;
     if (k >= s.size() || i >= t.positions_m.size()) {
@@ -357,13 +362,10 @@ DemPlant::Pose DemPlant::fit_pose(const Fillet& fillet) const {
       throw std::logic_error("dem plant: fillet " + std::to_string(fillet.plant_id) +
                              " holds a stale particle index");
     }
-    h += t.positions_m[i] * (s.position_m[k] - fillet.centroid_m).transpose();
+    fit.add(t.positions_m[i], s.position_m[k] - fillet.centroid_m);
   }
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
-  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0.0 ? -1.0 : 1.0;
   Pose pose;
-  pose.rotation = svd.matrixV() * d * svd.matrixU().transpose();
+  pose.rotation = fit.rotation();
   // Body x runs from the thick end to the tip; body z is the skin side's normal.
   pose.angle_rad = wrap_angle_rad(std::atan2(pose.rotation(1, 0), pose.rotation(0, 0)));
   pose.side = pose.rotation(2, 2) >= 0.0 ? SideUp::kSkin : SideUp::kBone;
@@ -586,10 +588,7 @@ void DemPlant::write_image(InputImage& in) {
   InputImage& image = image_;
   image.time_ns = time_ns_;
   drives_.write(image.drives);
-  const FastInfeedConfig& infeed = config_.shared.infeed;
-  const double layer_mm = infeed_.backlog_fillets * infeed.layer_mm_per_fillet;
-  infeed_.level_reading_mm =
-      std::max(0.0, layer_mm + static_cast<double>(infeed.level_noise_mm) * sensor_rng_.normal());
+  infeed_.level_reading_mm = level_mm();
   image.takt_beam_broken = beam_;
   image.level_mm = static_cast<float>(infeed_.level_reading_mm);
   image.hopper_opening_mm = static_cast<float>(infeed_.hopper_opening_mm);

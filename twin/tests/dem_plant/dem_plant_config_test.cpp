@@ -24,18 +24,21 @@ std::string read_text(const fs::path& file) {
   return text.str();
 }
 
-// plant_dem.yaml with one line replaced, beside copies of the two files it names.
-fs::path variant_file(const std::string& name, const std::string& from, const std::string& to) {
+// plant_dem.yaml beside copies of the files it names, with one passage of `edited` (one of
+// them) replaced.
+fs::path variant_file(const std::string& name, const std::string& from, const std::string& to,
+                      const std::string& edited = "plant_dem.yaml") {
   const fs::path dir = fs::temp_directory_path() / ("fl_plant_dem_config_" + name);
   fs::create_directories(dir);
-  for (const char* other : {"dem.yaml", "plant_fast.yaml"}) {
-    fs::copy_file(kConfigDir / other, dir / other, fs::copy_options::overwrite_existing);
+  for (const char* file : {"plant_dem.yaml", "dem.yaml", "plant_fast.yaml", "bulk_line.yaml"}) {
+    std::string text = read_text(kConfigDir / file);
+    if (file == edited) {
+      const std::size_t at = text.find(from);
+      EXPECT_NE(at, std::string::npos) << from;
+      if (at != std::string::npos) text.replace(at, from.size(), to);
+    }
+    std::ofstream(dir / file) << text;
   }
-  std::string text = read_text(kConfigDir / "plant_dem.yaml");
-  const std::size_t at = text.find(from);
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  std::ofstream(dir / "plant_dem.yaml") << text;
   return dir / "plant_dem.yaml";
 }
 
@@ -52,6 +55,53 @@ TEST(DemPlantConfigFile, ShippedMachineryAndSimulationEqualTheDefaults) {
   const DemPlantConfig loaded = load_dem_plant_config(kConfigDir / "plant_dem.yaml");
   EXPECT_EQ(loaded.machinery, default_dem_plant_config().machinery);
   EXPECT_EQ(loaded.simulation, default_dem_plant_config().simulation);
+  EXPECT_EQ(loaded.feeder, default_dem_plant_config().feeder);
+  EXPECT_EQ(loaded.feeder.source, DemInfeedSource::kLevelledLayer);
+  EXPECT_TRUE(loaded.bulk_end.leveller_belt.present);  // bulk_line.yaml, loaded either way
+}
+
+TEST(DemPlantConfigFile, UnknownInfeedSourceIsNamedWithTheChoices) {
+  const std::string error =
+      load_error(variant_file("source", "  source: levelled_layer", "  source: mailbox"));
+  EXPECT_NE(error.find("feeder.source"), std::string::npos) << error;
+  EXPECT_NE(error.find("dem_bulk_end"), std::string::npos) << error;
+}
+
+TEST(DemPlantConfigFile, LevelSensorBehindTheLevellersBladesIsRefused) {
+  // bulk_line.yaml's rotor reaches back to 500 - 150 = 350 mm.
+  const std::string error = load_error(
+      variant_file("sensor", "  level_sensor_to_mm: 330.0", "  level_sensor_to_mm: 420.0"));
+  EXPECT_NE(error.find("feeder.level_sensor_from_mm"), std::string::npos) << error;
+  EXPECT_NE(error.find("in front of the leveller"), std::string::npos) << error;
+}
+
+TEST(DemPlantConfigFile, BulkEndOfAnotherRasterIsRefused) {
+  const std::string error =
+      load_error(variant_file("raster", "  sub_particle_radius_mm: 7.0",
+                              "  sub_particle_radius_mm: 4.0", "bulk_line.yaml"));
+  EXPECT_NE(error.find("bulk_line.yaml"), std::string::npos) << error;
+  EXPECT_NE(error.find("simulation.sub_particle_radius_mm"), std::string::npos) << error;
+  EXPECT_NE(error.find("must equal plant_dem.yaml"), std::string::npos) << error;
+}
+
+TEST(DemPlantConfigFile, BulkEndStepBetweenThePlantsStepsIsRefused) {
+  // 1.5 ms against the plant's 1 ms: the scene could not step whole steps with the line.
+  const std::string error = load_error(variant_file("step", "  control_step_s: 0.002",
+                                                    "  control_step_s: 0.0015", "bulk_line.yaml"));
+  EXPECT_NE(error.find("simulation.control_step_s"), std::string::npos) << error;
+  EXPECT_NE(error.find("whole multiple"), std::string::npos) << error;
+}
+
+// One belt under hopper and leveller: the level control would stop the levelled layer with the
+// heap (a file the bulk scene itself reads: the section is optional there).
+TEST(DemPlantConfigFile, BulkEndWithoutTheLevellersBeltIsRefused) {
+  const std::string text = read_text(kConfigDir / "bulk_line.yaml");
+  const std::size_t at = text.find("\nleveller_belt:");
+  ASSERT_NE(at, std::string::npos);
+  const std::string error =
+      load_error(variant_file("one_belt", text.substr(at), "\n", "bulk_line.yaml"));
+  EXPECT_NE(error.find("bulk_line.yaml: leveller_belt"), std::string::npos) << error;
+  EXPECT_NE(error.find("the leveller's own belt"), std::string::npos) << error;
 }
 
 TEST(DemPlantConfigFile, ZeroParticlesPerThreadIsRefused) {

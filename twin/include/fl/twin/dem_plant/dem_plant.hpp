@@ -34,10 +34,21 @@
 //   belt (a belt-faced pusher), so it shifts without braking one side and turning the fillet.
 // - Squeeze roller: a cylinder mesh lowered onto the squeeze belt, rolling with it.
 // - Air knife: a removal zone around its position while it blows.
-// - Feeder (simplification of hopper, bulk belt and leveller): the hopper outflow fills a
-//   backlog counted in fillets (the level sensor reads it as heap height), and the running
-//   leveller places the next fillet (or touching pair) on the takt belt's upstream end when
-//   there is room, as the fast plant's levelled layer.
+// - Feeder, one of two (DemFeederConfig::source):
+//   - levelled_layer (simplification of hopper, bulk belt and leveller): the hopper outflow
+//     fills a backlog counted in fillets (the level sensor reads it as heap height), and the
+//     running leveller places the next fillet (or touching pair) on the takt belt's upstream
+//     end when there is room, as the fast plant's levelled layer.
+//   - dem_bulk_end: the mailbox hopper, bulk belt and leveller as a DEM scene of their own
+//     (BulkScene, config/bulk_line.yaml), stepped with the line. The controller's commands
+//     drive it: the bulk drive's actual speed moves its belt, the hopper opening its gate
+//     cylinder, the leveller command its rotor (through the same motor lag). The level sensor
+//     reads the highest fillet sphere in a window in front of the leveller. At the scene's
+//     discharge edge the leveller's belt stops while a fillet waits there (the transfer's
+//     photo-eye); that fillet moves onto the takt belt's upstream end, with its variant, side
+//     up, heading and place across, once there is room for it (beside fillets clear of it
+//     across, as a levelled layer lies). Simplification: it arrives as its template, rigid and
+//     at the takt belt's speed, not with the bend it had (two engines, joined at the transfer).
 // - Cameras: the shared CameraEmulator (fl/twin/sensors: period, jitter, latency, noise,
 //   misses, misclassification, faults), the same as the fast plant's, on each fillet's
 //   ground-truth rigid pose (a least-squares fit of its spheres to its template); a fillet
@@ -117,6 +128,7 @@ struct DemPlantCounters {
   std::uint64_t misflips = 0;
   std::uint64_t rebuilds = 0;      // engine rebuilt to take fillets out
   std::uint64_t engine_steps = 0;  // frame counters: cameras().counters()
+  std::uint64_t handed_over = 0;   // dem_bulk_end: fillets moved from the bulk end to the takt
 };
 
 class DemPlant final : public Plant {
@@ -143,6 +155,15 @@ class DemPlant final : public Plant {
   [[nodiscard]] std::int64_t time_ns() const { return time_ns_; }
   [[nodiscard]] const std::vector<dem::FilletTemplate>& templates() const { return templates_; }
   [[nodiscard]] double engine_timestep_s() const;
+  // The bulk end's DEM scene (DemInfeedSource::kDemBulkEnd), null with the levelled layer.
+  [[nodiscard]] const BulkScene* bulk_end() const { return bulk_.get(); }
+  // The last fillet moved from the bulk end onto the takt belt, as the scene gave it, and the
+  // plant id it got there.
+  struct Handover {
+    BulkHandover from_bulk;
+    std::uint32_t plant_id = 0;
+  };
+  [[nodiscard]] const std::optional<Handover>& last_handover() const { return last_handover_; }
 
  private:
   // The sphere group's fields are from the last particle pass.
@@ -235,7 +256,21 @@ class DemPlant final : public Plant {
 
   // dem_feeder.cpp
   void step_infeed(double h_s, const OutputImage& out);
+  void step_layer_infeed(double h_s, const OutputImage& out);
+  void step_bulk_end(const OutputImage& out);
+  void start_bulk_end(std::uint64_t seed);
+  [[nodiscard]] double level_mm();
   void draw_next_feed();
+  // The takt belt's upstream end has room for a fillet of this template and heading, with
+  // `gap_m` behind the last one (or, with its place across `y_mm` given, beside those clear
+  // of it across by `gap_m`): where its centroid goes along the line, else none.
+  [[nodiscard]] std::optional<double> entry_room_m(const dem::FilletTemplate& t, double angle_rad,
+                                                   double gap_m,
+                                                   std::optional<double> y_mm = {}) const;
+  // A fillet's lateral place on the takt belt at its heading: y clear of the side walls (and
+  // a pair's partner to its left).
+  [[nodiscard]] double entry_y_mm(const dem::FilletTemplate& t, double angle_rad, double y_mm,
+                                  bool pair) const;
 
   LineConfig line_;
   DemPlantConfig config_;
@@ -262,6 +297,10 @@ class DemPlant final : public Plant {
   std::size_t exit_count_ = 0;
   std::size_t exits_drained_ = 0;
   bool beam_ = false;
+
+  std::unique_ptr<BulkScene> bulk_;  // dem_bulk_end
+  std::int64_t bulk_due_ns_ = 0;     // plant time of the scene's next control step
+  std::optional<Handover> last_handover_;
 
   TwinRng feed_rng_;
   TwinRng body_rng_;

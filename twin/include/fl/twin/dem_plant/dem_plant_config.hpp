@@ -6,12 +6,15 @@
 // - the DEM engine's materials, laws and solver settings (config/dem.yaml, thesis appendix B);
 // - the cameras, the levelled layer on the takt belt, the hopper and leveller, and the drive
 //   delay (config/plant_fast.yaml): the DEM plant's sensors behave as the fast plant's.
+// A third, the bulk end as a DEM scene (config/bulk_line.yaml: hopper, bulk belt, leveller),
+// feeds the takt belt instead of the levelled-layer model when DemFeederConfig::source says so.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 
 #include "fl/twin/dem/model.hpp"
+#include "fl/twin/dem_bulk/bulk_scene.hpp"
 #include "fl/twin/fast_plant_config.hpp"
 
 namespace fl {
@@ -95,8 +98,28 @@ struct DemLossConfig {
   bool operator==(const DemLossConfig&) const = default;
 };
 
+// What puts fillets on the takt belt's upstream end.
+enum class DemInfeedSource : std::uint8_t {
+  // plant_fast.yaml's model of hopper, bulk belt and leveller: a backlog counted in fillets,
+  // no particles; the level sensor reads the backlog as heap height.
+  kLevelledLayer,
+  // The bulk end as a DEM scene (BulkScene, DemPlantConfig::bulk_end) run beside the line:
+  // the controller's bulk belt, hopper opening and leveller commands drive it, the level
+  // sensor measures its heap in front of the leveller, and each fillet that reaches the stop
+  // plate at its discharge edge moves onto the takt belt when there is room.
+  kDemBulkEnd,
+};
+
 struct DemFeederConfig {
   float spawn_lift_mm = 2.0F;  // a new fillet is placed this high over the takt belt
+  DemInfeedSource source = DemInfeedSource::kLevelledLayer;
+  // kDemBulkEnd: the level sensor's window along the bulk scene's travel (its x, millimetres
+  // from the gate), in front of the leveller; it reads the highest fillet sphere there.
+  float level_sensor_from_mm = 250.0F;
+  float level_sensor_to_mm = 330.0F;
+  // kDemBulkEnd: a fillet at the stop plate moves onto the takt belt once the last fillet
+  // there has left this much room behind it (the transfer's own spacing).
+  float handover_gap_mm = 20.0F;
   bool operator==(const DemFeederConfig&) const = default;
 };
 
@@ -111,6 +134,9 @@ struct DemPlantConfig {
   // config/dem.yaml: materials, types (fillet_a, fillet_b, equipment) and laws; the plant
   // sets timestep, domain, skin, threads and walls.
   dem::ModelSpec engine;
+  // config/bulk_line.yaml: the bulk end as a DEM scene, for DemInfeedSource::kDemBulkEnd (its
+  // hold_at_discharge is set by the plant). Loaded and checked whichever source is chosen.
+  BulkDemConfig bulk_end;
 };
 
 // Defaults: the structs' defaults, the fast plant's defaults and the thesis' appendix B model.
