@@ -26,7 +26,7 @@ if(FL_BUILD_TESTS)
     # half real time here, several times that under the sanitizers): label slow, so the
     # sanitizer run leaves them to release.
     set(FL_DEM_PLANT_SLOW_TESTS
-        "DemPlantBulkEnd.HandedOverFilletsKeepVariantSideHeadingAndPlace:DemPlantBulkEnd.ClosedLoopFeedsTheLineFromTheHopper")
+        "DemPlantBulkEnd.HandedOverFilletsKeepVariantSideHeadingAndPlace:DemPlantBulkEnd.ClosedLoopFeedsTheLineFromTheHopper:DemPlantBulkEnd.ALoadOverTheTripTorqueTripsTheLeveller")
     gtest_discover_tests(twin_dem_plant_tests TEST_FILTER "-${FL_DEM_PLANT_SLOW_TESTS}"
                          DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300)
     gtest_discover_tests(twin_dem_plant_tests TEST_FILTER "${FL_DEM_PLANT_SLOW_TESTS}"

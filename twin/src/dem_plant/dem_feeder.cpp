@@ -44,9 +44,10 @@ void DemPlant::draw_next_feed() {
 
 void DemPlant::step_infeed(double h_s, const OutputImage& out) {
   const FastInfeedConfig& config = config_.shared.infeed;
-  // The leveller's motor: the same lag whichever rotor it turns.
-  const double rpm_target =
-      faults_.estop_open ? 0.0 : std::max(0.0, static_cast<double>(out.leveller_speed_rpm));
+  // The leveller's motor: the same lag whichever rotor it turns; a tripped one runs down.
+  const double rpm_target = faults_.estop_open || infeed_.leveller_overload
+                                ? 0.0
+                                : std::max(0.0, static_cast<double>(out.leveller_speed_rpm));
   const double tau_s = std::max(static_cast<double>(config.leveller_time_constant_s), 1e-6);
   infeed_.leveller_rpm += (rpm_target - infeed_.leveller_rpm) * (1.0 - std::exp(-h_s / tau_s));
   if (bulk_) {
@@ -158,6 +159,14 @@ void DemPlant::step_bulk_end(const OutputImage& out) {
     bulk_due_ns_ += scene_step_ns;
   }
   infeed_.hopper_opening_mm = bulk_->gate_opening_mm();
+  // The rotor's load against the motor: over the trip torque the motor protection trips, and
+  // it stays tripped until the leveller is commanded off (its reset).
+  if (bulk_->leveller_load_mean().torque_nm >
+      static_cast<double>(config_.feeder.leveller_trip_torque_nm)) {
+    infeed_.leveller_overload = true;
+  } else if (out.leveller_speed_rpm <= 0.0F) {
+    infeed_.leveller_overload = false;
+  }
 
   // The transfer: the fillet at the stop plate moves onto the takt belt when there is room.
   const std::optional<BulkHandover> front = bulk_->front_at_discharge();

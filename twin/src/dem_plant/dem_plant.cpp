@@ -593,7 +593,7 @@ void DemPlant::write_image(InputImage& in) {
   image.level_mm = static_cast<float>(infeed_.level_reading_mm);
   image.hopper_opening_mm = static_cast<float>(infeed_.hopper_opening_mm);
   image.leveller_speed_rpm = static_cast<float>(infeed_.leveller_rpm);
-  image.leveller_overload = false;
+  image.leveller_overload = infeed_.leveller_overload;
   image.flip_plate1_flipping = stations_.plate1_travel >= 1.0;
   image.flip_plate2_flipping = stations_.plate2_travel >= 1.0;
   image.centring_position_mm = static_cast<float>(stations_.pusher_mm);

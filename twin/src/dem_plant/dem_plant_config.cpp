@@ -170,6 +170,7 @@ DemPlantConfig load_dem_plant_config(const std::filesystem::path& file) {
       f.level_sensor_from_mm = map.read_float("level_sensor_from_mm", Range::any());
       f.level_sensor_to_mm = map.read_float("level_sensor_to_mm", Range::any());
       f.handover_gap_mm = map.read_float("handover_gap_mm", Range::closed(0.0, 500.0));
+      f.leveller_trip_torque_nm = map.read_float("leveller_trip_torque_nm", Range::positive());
       map.finish();
       reader.require(f.level_sensor_from_mm < f.level_sensor_to_mm,
                      {"feeder.level_sensor_from_mm", "feeder.level_sensor_to_mm"},

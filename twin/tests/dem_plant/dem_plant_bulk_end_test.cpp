@@ -63,6 +63,45 @@ TEST(DemPlantBulkEnd, CommandsDriveTheSceneAndItsSensorsAreRead) {
   EXPECT_LT(bulk.leveller_rpm(), 120.0 * std::exp(-1.0 / 0.4) + 0.5);
 }
 
+// The leveller's motor trips on the rotor's real load. At the rated 29 N m the layer never
+// trips it (the thesis' bulk run loaded its rotor with 0.2 to 1.3 N m); at 0.05 N m the
+// first fillets the blades sweep back do: the input image says overload and the rotor runs
+// down with the motor's lag, and the line's jam check sees it.
+TEST(DemPlantBulkEnd, ALoadOverTheTripTorqueTripsTheLeveller) {
+  for (const float trip_nm : {29.0F, 0.05F}) {
+    DemPlantConfig config = bulk_end_config();
+    config.feeder.leveller_trip_torque_nm = trip_nm;
+    DemRig rig(config);
+    rig.out = infeed_running(rig.line, 0.15F);
+    double most_torque_nm = 0.0;
+    bool tripped = false;
+    double rpm_after_trip = 0.0;
+    for (int k = 0; k < 600 && !tripped; ++k) {  // up to 6 s: the heap reaches the rotor by 4 s
+      rig.step();
+      most_torque_nm =
+          std::max(most_torque_nm, rig.plant->bulk_end()->leveller_load_mean().torque_nm);
+      tripped = rig.in.leveller_overload;
+    }
+    SCOPED_TRACE("trip torque " + std::to_string(trip_nm) + " N m");
+    EXPECT_GT(most_torque_nm, 0.05);  // the blades met the layer
+    if (trip_nm > 1.0F) {
+      EXPECT_FALSE(tripped);
+      EXPECT_LT(most_torque_nm, trip_nm);
+      continue;
+    }
+    ASSERT_TRUE(tripped);
+    const double rpm_at_trip = rig.plant->bulk_end()->leveller_rpm();
+    rig.run(0.4);  // one motor time constant: down to about 37 %, tripped all along
+    rpm_after_trip = rig.plant->bulk_end()->leveller_rpm();
+    EXPECT_TRUE(rig.in.leveller_overload);
+    EXPECT_LT(rpm_after_trip, 0.45 * rpm_at_trip);
+    // Commanded off, the protection resets; commanded on again, the motor starts.
+    rig.out.leveller_speed_rpm = 0.0F;
+    rig.step();
+    EXPECT_FALSE(rig.in.leveller_overload);
+  }
+}
+
 // Every fillet on the takt belt came over the transfer, as the scene handed it on: its
 // template's size and hand, its side up, its heading, and its place across the belt.
 TEST(DemPlantBulkEnd, HandedOverFilletsKeepVariantSideHeadingAndPlace) {
@@ -116,7 +155,9 @@ TEST(DemPlantBulkEnd, ClosedLoopFeedsTheLineFromTheHopper) {
   options.measure_compute = false;
   float lowest_bulk_mps = 1e9F;
   float highest_bulk_mps = -1e9F;
-  options.after_update = [&](const InputImage&, const OutputImage& out) {
+  bool leveller_overload = false;
+  options.after_update = [&](const InputImage& in, const OutputImage& out) {
+    leveller_overload = leveller_overload || in.leveller_overload;
     if (out.leveller_speed_rpm <= 0.0F) return;  // starting and stopping
     const float bulk_mps = out.drives[index(DriveId::kBulk)].speed_mps;
     lowest_bulk_mps = std::min(lowest_bulk_mps, bulk_mps);
@@ -132,6 +173,7 @@ TEST(DemPlantBulkEnd, ClosedLoopFeedsTheLineFromTheHopper) {
   const BulkCounters& bulk = rig.plant->bulk_end()->counters();
   EXPECT_GT(bulk.passed_gate, bulk.discharged);  // a layer stands between gate and transfer
   EXPECT_EQ(bulk.lost, 0U);
+  EXPECT_FALSE(leveller_overload);  // the layer is far under the motor's rated torque
   // The level loop regulated: the bulk belt ran at its limit while the heap was low and was
   // slowed when the heap stood over the 60 mm setpoint.
   EXPECT_FLOAT_EQ(highest_bulk_mps, rig.line.bulk.max_speed_mps);

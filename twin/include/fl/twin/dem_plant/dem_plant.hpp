@@ -205,6 +205,7 @@ class DemPlant final : public Plant {
     double backlog_fillets = 0.0;
     double leveller_rpm = 0.0;
     double level_reading_mm = 0.0;
+    bool leveller_overload = false;  // dem_bulk_end: the motor's trip (load torque)
   };
   struct NextFeed {
     std::uint8_t variant = 0;

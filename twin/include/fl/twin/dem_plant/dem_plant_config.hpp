@@ -120,6 +120,11 @@ struct DemFeederConfig {
   // kDemBulkEnd: a fillet at the stop plate moves onto the takt belt once the last fillet
   // there has left this much room behind it (the transfer's own spacing).
   float handover_gap_mm = 20.0F;
+  // kDemBulkEnd: the leveller motor's overload trip. The rotor's load torque (the engine's
+  // reaction on the rotor wall, mean over a control step) above this trips it: the rotor runs
+  // down and the input image says overload until the leveller is commanded off (the motor
+  // protection's reset). 29 N m is a 0.37 kW gear motor's rated torque at 120 rpm (P / omega).
+  float leveller_trip_torque_nm = 29.0F;
   bool operator==(const DemFeederConfig&) const = default;
 };
 
