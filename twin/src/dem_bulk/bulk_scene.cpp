@@ -11,7 +11,7 @@
 #include <string>
 
 #include "fl/report/csv.hpp"
-#include "fl/twin/dem/fillet_bend.hpp"
+#include "fl/twin/dem/body_fit.hpp"
 #include "fl/twin/dem/fillet_generator.hpp"
 #include "fl/twin/dem/geometry.hpp"
 
@@ -421,18 +421,6 @@ const BulkScene::Fillet* BulkScene::front_fillet() const {
 }
 
 BulkHandover BulkScene::handover_of(const Fillet& fillet) const {
-  const dem::State& s = sim_->state();
-  const dem::FilletTemplate& t = templates_[fillet.variant];
-  dem::TemplateRotationFit fit;
-  for (const std::uint32_t k : fillet.particles) {
-    const std::uint32_t i = s.id[k] - fillet.first_id;
-    if (k >= s.size() || i >= t.positions_m.size()) {
-      // an invariant, not input: particle indices read after a re-order without a rescan
-      throw std::logic_error("bulk scene: fillet " + std::to_string(fillet.id) +
-                             " holds a stale particle index");
-    }
-    fit.add(t.positions_m[i], s.position_m[k] - fillet.centroid_m);
-  }
   BulkHandover handover;
   handover.id = fillet.id;
   handover.variant = fillet.variant;
@@ -441,7 +429,9 @@ BulkHandover BulkScene::handover_of(const Fillet& fillet) const {
   handover.velocity_m_per_s = fillet.velocity_m_per_s;
   handover.lower_m = fillet.lower_m;
   handover.upper_m = fillet.upper_m;
-  handover.rotation = fit.rotation();
+  handover.rotation = dem::fit_template_rotation(
+      sim_->state(), fillet.particles, templates_[fillet.variant], fillet.first_id,
+      fillet.centroid_m, "bulk scene: fillet " + std::to_string(fillet.id));
   return handover;
 }
 

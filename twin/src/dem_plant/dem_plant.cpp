@@ -10,6 +10,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "fl/twin/dem/body_fit.hpp"
 #include "fl/twin/dem/fillet_bend.hpp"
 #include "fl/twin/dem/fillet_generator.hpp"
 
@@ -352,20 +353,10 @@ void DemPlant::scan_particles() {
 
 DemPlant::Pose DemPlant::fit_pose(const Fillet& fillet) const {
   // Least-squares rotation of the template onto the spheres (Kabsch): H = sum p (x - c)^T.
-  const dem::State& s = sim_->state();
-  const dem::FilletTemplate& t = templates_[fillet.variant];
-  dem::TemplateRotationFit fit;
-  for (const std::uint32_t k : fillet.particles) {
-    const std::uint32_t i = s.id[k] - fillet.first_id;
-    if (k >= s.size() || i >= t.positions_m.size()) {
-      // an invariant, not input: particle indices read after a re-order without a rescan
-      throw std::logic_error("dem plant: fillet " + std::to_string(fillet.plant_id) +
-                             " holds a stale particle index");
-    }
-    fit.add(t.positions_m[i], s.position_m[k] - fillet.centroid_m);
-  }
   Pose pose;
-  pose.rotation = fit.rotation();
+  pose.rotation = dem::fit_template_rotation(
+      sim_->state(), fillet.particles, templates_[fillet.variant], fillet.first_id,
+      fillet.centroid_m, "dem plant: fillet " + std::to_string(fillet.plant_id));
   // Body x runs from the thick end to the tip; body z is the skin side's normal.
   pose.angle_rad = wrap_angle_rad(std::atan2(pose.rotation(1, 0), pose.rotation(0, 0)));
   pose.side = pose.rotation(2, 2) >= 0.0 ? SideUp::kSkin : SideUp::kBone;
