@@ -7,8 +7,8 @@
 //   the takt belt's upstream end when there is room behind the last one, at the takt belt's
 //   speed: the levelled layer the fast plant feeds, here as DEM bodies.
 // - dem_bulk_end: the hopper, bulk belt and leveller as a DEM scene (BulkScene), driven by the
-//   same commands; its fillets gather at a stop plate at the scene's end and move onto the
-//   takt belt one by one.
+//   same commands; its fillets wait at the scene's end on the stopped leveller's belt and move
+//   onto the takt belt one by one, behind or beside the fillets there.
 #include <algorithm>
 #include <cmath>
 #include <numbers>
