@@ -28,12 +28,16 @@ std::string frame_name(const char* prefix, std::size_t frame) {
 
 }  // namespace
 
-void write_vtk_particles(const State& state, const std::filesystem::path& file) {
+void write_vtk_particles(const State& state, const std::filesystem::path& file,
+                         const Vec3& offset_m) {
   std::ofstream out = open_for_writing(file);
   const std::size_t n = state.size();
   out << "# vtk DataFile Version 3.0\nfl dem particles t=" << state.time_s
       << " s\nASCII\nDATASET POLYDATA\nPOINTS " << n << " double\n";
-  for (const Vec3& x : state.position_m) out << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
+  for (const Vec3& position : state.position_m) {
+    const Vec3 x = position + offset_m;
+    out << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
+  }
   out << "VERTICES " << n << ' ' << 2 * n << '\n';
   for (std::size_t k = 0; k < n; ++k) out << "1 " << k << '\n';
   out << "POINT_DATA " << n << "\nSCALARS radius_m double 1\nLOOKUP_TABLE default\n";
@@ -50,7 +54,7 @@ void write_vtk_particles(const State& state, const std::filesystem::path& file) 
 }
 
 void write_vtk_walls(const Model& model, const State& state, const std::filesystem::path& file,
-                     double plane_half_size_m) {
+                     double plane_half_size_m, const Vec3& offset_m) {
   const ModelSpec& spec = model.spec();
   std::vector<Vec3> points;
   std::vector<std::size_t> polygon_sizes;
@@ -82,7 +86,10 @@ void write_vtk_walls(const Model& model, const State& state, const std::filesyst
   std::ofstream out = open_for_writing(file);
   out << "# vtk DataFile Version 3.0\nfl dem walls t=" << state.time_s
       << " s\nASCII\nDATASET POLYDATA\nPOINTS " << points.size() << " double\n";
-  for (const Vec3& x : points) out << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
+  for (const Vec3& point : points) {
+    const Vec3 x = point + offset_m;
+    out << x.x() << ' ' << x.y() << ' ' << x.z() << '\n';
+  }
   std::size_t entries = 0;
   for (const std::size_t size : polygon_sizes) entries += size + 1;
   out << "POLYGONS " << polygon_sizes.size() << ' ' << entries << '\n';
@@ -107,10 +114,11 @@ VtkSeriesWriter::VtkSeriesWriter(std::filesystem::path directory)
   }
 }
 
-void VtkSeriesWriter::write(const Simulation& simulation) {
+void VtkSeriesWriter::write(const Simulation& simulation, const Vec3& offset_m) {
   const std::size_t frame = times_s_.size();
-  write_vtk_particles(simulation.state(), directory_ / frame_name("particles", frame));
-  write_vtk_walls(simulation.model(), simulation.state(), directory_ / frame_name("walls", frame));
+  write_vtk_particles(simulation.state(), directory_ / frame_name("particles", frame), offset_m);
+  write_vtk_walls(simulation.model(), simulation.state(), directory_ / frame_name("walls", frame),
+                  0.5, offset_m);
   times_s_.push_back(simulation.state().time_s);
   // ParaView collection: one DataSet per frame and part, rewritten whole (small).
   const std::filesystem::path pvd = collection_file();

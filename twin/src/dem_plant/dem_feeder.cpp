@@ -194,6 +194,11 @@ void DemPlant::step_bulk_end(const OutputImage& out) {
   }
 }
 
+dem::Vec3 DemPlant::bulk_end_offset_m() const {
+  const double entry_m = -static_cast<double>(line_.takt_belt_length_mm) * kMm;
+  return {entry_m - config_.bulk_end.belt.discharge_mm * kMm, 0.0, deck_z_m(entry_m)};
+}
+
 double DemPlant::level_mm() {
   const FastInfeedConfig& infeed = config_.shared.infeed;
   const double heap_mm = bulk_ ? bulk_->heap_height_mm(config_.feeder.level_sensor_from_mm,

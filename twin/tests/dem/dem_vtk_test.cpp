@@ -98,6 +98,29 @@ TEST_F(DemVtkOutput, SeriesListsEveryFrameWithItsTime) {
   EXPECT_NEAR(points[0] + points[3], 0.0, 1e-9);
 }
 
+// A scene placed in another's frame (the DEM line's bulk end): every particle and wall point
+// moved by the offset, nothing else changed.
+TEST_F(DemVtkOutput, AnOffsetMovesEveryPointOfTheSeries) {
+  Simulation sim(std::make_shared<Model>(model_with_mesh()));
+  sim.add_sphere({Vec3(0.05, 0.01, 0.1), test::kRadius, 0});
+  const Vec3 offset(-1.5, 0.02, 0.1);
+  VtkSeriesWriter series(dir_);
+  series.write(sim, offset);
+  const std::vector<double> particle =
+      section(read_text(dir_ / "particles_000000.vtk"), "POINTS", 1);
+  ASSERT_EQ(particle.size(), 3U);
+  EXPECT_NEAR(particle[0], 0.05 - 1.5, 1e-12);
+  EXPECT_NEAR(particle[1], 0.01 + 0.02, 1e-12);
+  EXPECT_NEAR(particle[2], 0.1 + 0.1, 1e-12);
+  // The plate's second vertex (0.1, 0, 0), after the floor's 4 corners.
+  const std::vector<double> walls = section(read_text(dir_ / "walls_000000.vtk"), "POINTS", 7);
+  ASSERT_EQ(walls.size(), 21U);
+  EXPECT_NEAR(walls[15], 0.1 - 1.5, 1e-12);
+  EXPECT_NEAR(walls[16], 0.02, 1e-12);
+  EXPECT_NEAR(walls[17], 0.1, 1e-12);
+  for (int corner = 0; corner < 4; ++corner) EXPECT_NEAR(walls[corner * 3 + 2], 0.1, 1e-12);
+}
+
 TEST_F(DemVtkOutput, UnwritableDirectoryIsAClearError) {
   const std::filesystem::path file = dir_ / "not_a_dir";
   std::filesystem::create_directories(dir_);

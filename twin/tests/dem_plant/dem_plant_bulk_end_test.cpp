@@ -39,6 +39,14 @@ TEST(DemPlantBulkEnd, CommandsDriveTheSceneAndItsSensorsAreRead) {
   // The initial fill is what fits in the hopper's slots; the feeder drops the rest later.
   EXPECT_GT(bulk.counters().fed, 0U);
   EXPECT_LE(bulk.counters().fed, rig.config.bulk_end.feeder.initial_fill);
+  // In pictures the scene stands where it feeds: its discharge edge at the takt belt's
+  // upstream end (600 mm before the barrier), its belt at the takt belt's level (the guide's
+  // start, plant_dem.yaml: 150 - 50 mm over the reject belt).
+  const dem::Vec3 offset = rig.plant->bulk_end_offset_m();
+  EXPECT_NEAR(offset.x() + rig.config.bulk_end.belt.discharge_mm * 1e-3,
+              -rig.line.takt_belt_length_mm * 1e-3, 1e-12);
+  EXPECT_DOUBLE_EQ(offset.y(), 0.0);
+  EXPECT_NEAR(offset.z(), 0.100, 1e-12);
 
   rig.out = infeed_running(rig.line, 0.1F);
   rig.out.hopper_opening_mm = 90.0F;  // the controller's unblock opening

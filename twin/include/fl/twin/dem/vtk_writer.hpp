@@ -17,17 +17,20 @@
 
 namespace fl::dem {
 
-// Both throw std::runtime_error naming the file when it cannot be written.
-void write_vtk_particles(const State& state, const std::filesystem::path& file);
+// Both throw std::runtime_error naming the file when it cannot be written. `offset_m` moves
+// every point: a scene of its own (the DEM line's bulk end) placed where it stands in another's
+// frame, so that both series open together in ParaView.
+void write_vtk_particles(const State& state, const std::filesystem::path& file,
+                         const Vec3& offset_m = Vec3::Zero());
 void write_vtk_walls(const Model& model, const State& state, const std::filesystem::path& file,
-                     double plane_half_size_m = 0.5);
+                     double plane_half_size_m = 0.5, const Vec3& offset_m = Vec3::Zero());
 
 // Writes DIR/particles_NNNNNN.vtk and DIR/walls_NNNNNN.vtk per frame and rewrites DIR/run.pvd
 // after each frame, so the collection is valid even if the run stops early.
 class VtkSeriesWriter {
  public:
   explicit VtkSeriesWriter(std::filesystem::path directory);  // creates it
-  void write(const Simulation& simulation);
+  void write(const Simulation& simulation, const Vec3& offset_m = Vec3::Zero());
   [[nodiscard]] std::size_t frames() const { return times_s_.size(); }
   [[nodiscard]] std::filesystem::path collection_file() const { return directory_ / "run.pvd"; }
 

@@ -164,6 +164,9 @@ class DemPlant final : public Plant {
     std::uint32_t plant_id = 0;
   };
   [[nodiscard]] const std::optional<Handover>& last_handover() const { return last_handover_; }
+  // Where the bulk end's frame lies in the line's (engine metres): its discharge edge at the
+  // takt belt's upstream end, its belt surface at the takt belt's. For pictures of both.
+  [[nodiscard]] dem::Vec3 bulk_end_offset_m() const;
 
  private:
   // The sphere group's fields are from the last particle pass.
