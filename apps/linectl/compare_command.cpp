@@ -73,12 +73,47 @@ void add_model_options(CLI::App& command, CompareArgs& args) {
       ->check(CLI::Range(1, 64));
 }
 
+// compare and diagnose: the ensemble's size, for line-track datasets only.
+void add_ensemble_option(CLI::App& command, CompareArgs& args) {
+  command
+      .add_option("--ensemble", args.ensemble,
+                  "line_tracks: twin runs per trial, from first poses jittered by the noise; "
+                  "the mean is compared and the spread added to the noise")
+      ->check(CLI::Range(1, 64));
+}
+
+// The twin settings of the arguments; nullopt (reported) for an ensemble of a dataset that is
+// not line tracks.
+std::optional<TwinSettings> twin_settings(const CompareArgs& args, const Dataset& dataset) {
+  TwinSettings settings;
+  if (args.ensemble > 1 && dataset.experiment != ExperimentType::kLineTracks) {
+    spdlog::error("{}: --ensemble runs line_tracks datasets, and this one is {}", args.dataset,
+                  to_string(dataset.experiment));
+    return std::nullopt;
+  }
+  if (args.ensemble > 1) {
+    for (const std::string_view channel : {"x", "y", "angle"}) {
+      const auto noise = dataset.noise_si.find(channel);
+      if (noise == dataset.noise_si.end() || !(noise->second > 0.0)) {
+        spdlog::error(
+            "{}: --ensemble jitters the first poses by the manifest's noise, and it gives none "
+            "for '{}'",
+            args.dataset, channel);
+        return std::nullopt;
+      }
+    }
+  }
+  settings.line_tracks.ensemble_runs = args.ensemble;
+  return settings;
+}
+
 }  // namespace
 
 CLI::App* add_diagnose_subcommand(CLI::App& app, CompareArgs& args) {
   CLI::App* command = app.add_subcommand(
       "diagnose", "find which effect of the effect library the model lacks for a dataset");
   add_model_options(*command, args);
+  add_ensemble_option(*command, args);
   return command;
 }
 
@@ -142,7 +177,11 @@ int diagnose_command(const CompareArgs& args) {
     spdlog::error("{}: {}", args.dataset, error.what());
     return 2;
   }
-  const Diagnosis diagnosis = diagnose(inputs->dataset, inputs->common, candidates);
+  DiagnoseOptions options;
+  const std::optional<TwinSettings> twin = twin_settings(args, inputs->dataset);
+  if (!twin) return 2;
+  options.twin = *twin;
+  const Diagnosis diagnosis = diagnose(inputs->dataset, inputs->common, candidates, options);
   const fs::path out = out_folder(args, "diagnose_");
   fs::create_directories(out);
   std::ofstream(out / "diagnosis.json") << diagnosis_json(diagnosis) << "\n";
@@ -156,7 +195,9 @@ int diagnose_command(const CompareArgs& args) {
   }
   spdlog::info("{}", diagnosis.verdict);
   const HiddenEffect effect = proposed_effect(diagnosis);
-  if (!effect.law.empty() && inputs->dataset.experiment == ExperimentType::kSlide) {
+  const bool contact_effect = inputs->dataset.experiment == ExperimentType::kSlide ||
+                              inputs->dataset.experiment == ExperimentType::kLineTracks;
+  if (!effect.law.empty() && contact_effect) {
     std::string snippet = "      - law: " + effect.law + "\n";
     for (const auto& [key, value] : effect.parameters) {
       snippet += fmt::format("        {}: {:.6g}\n", key, value);
@@ -320,6 +361,7 @@ int calibrate_command(const CalibrateArgs& args) {
 CLI::App* add_compare_subcommand(CLI::App& app, CompareArgs& args) {
   CLI::App* command = app.add_subcommand("compare", "compare the DEM twin with a measured dataset");
   add_model_options(*command, args);
+  add_ensemble_option(*command, args);
   return command;
 }
 
@@ -327,7 +369,9 @@ int compare_command(const CompareArgs& args) {
   const std::optional<WorkbenchInputs> inputs = load_inputs(args);
   if (!inputs) return 2;
   const Dataset& dataset = inputs->dataset;
-  std::unique_ptr<TrialModel> model = make_twin_model(dataset.experiment, inputs->common);
+  const std::optional<TwinSettings> twin = twin_settings(args, dataset);
+  if (!twin) return 2;
+  std::unique_ptr<TrialModel> model = make_twin_model(dataset.experiment, inputs->common, *twin);
   spdlog::info("comparing {} ({} trials, {}) with: {}", dataset.name, dataset.trials.size(),
                to_string(dataset.experiment), model->describe());
   const CompareReport report = compare(dataset, *model);

@@ -30,6 +30,7 @@ struct CompareArgs {
   std::string dem_config;  // default: config/dem.yaml
   double radius_mm = 7.0;  // sub-particle radius of the twin's samples
   int threads = 1;
+  int ensemble = 1;  // line tracks: twin runs per trial from first poses within the noise
 };
 
 struct GenerateArgs {

@@ -45,11 +45,18 @@ struct Accumulator {
   double sum_sq_measured = 0.0;
   double max_abs = 0.0;
   double max_abs_time = 0.0;
+  double sum_sq_spread = 0.0;
+  // Sum of the squared residuals in the row's own sigma (noise and the model's spread at the
+  // row); only when the noise is known.
+  double sum_sq_standardised = 0.0;
 
-  void add(double measured, double model, double time) {
+  void add(double measured, double model, double spread, double noise, double time) {
     const double residual = model - measured;
     ++samples;
     sum_sq += residual * residual;
+    sum_sq_spread += spread * spread;
+    const double variance = noise * noise + spread * spread;
+    if (variance > 0.0) sum_sq_standardised += residual * residual / variance;
     sum += residual;
     sum_sq_measured += measured * measured;
     if (std::abs(residual) >= max_abs) {
@@ -73,8 +80,13 @@ ErrorCell make_cell(const std::string& channel, std::string group, std::string t
   cell.max_abs_si = a.max_abs;
   cell.max_abs_time_s = a.max_abs_time;
   cell.noise_si = noise_si;
-  const double scale = noise_si > 0.0 ? noise_si : std::sqrt(a.sum_sq_measured / n);
-  cell.score = scale > 0.0 ? cell.rmse_si / scale : cell.rmse_si;
+  cell.model_spread_si = std::sqrt(a.sum_sq_spread / n);
+  if (noise_si > 0.0) {
+    cell.score = std::sqrt(a.sum_sq_standardised / n);
+  } else {
+    const double scale = std::sqrt(a.sum_sq_measured / n);
+    cell.score = scale > 0.0 ? cell.rmse_si / scale : cell.rmse_si;
+  }
   return cell;
 }
 
@@ -151,12 +163,15 @@ CompareReport compare(const Dataset& dataset, TrialModel& model) {
   };
   std::map<std::string, Group> groups;
   const auto add = [&](std::string_view channel, const std::string& key, const std::string& trial,
-                       const std::string& phase, double measured, double model_value, double time) {
+                       const std::string& phase, double measured, double model_value, double spread,
+                       double time) {
     Group& g = groups[std::string(channel) + "\n" + key];
     g.group = key;
     g.trial = trial;
     g.phase = phase;
-    g.acc.add(measured, model_value, time);
+    const auto noise = dataset.noise_si.find(channel);
+    g.acc.add(measured, model_value, spread, noise == dataset.noise_si.end() ? 0.0 : noise->second,
+              time);
   };
   std::set<std::string> varying_conditions;
   for (const Trial& trial : dataset.trials) {
@@ -212,26 +227,32 @@ CompareReport compare(const Dataset& dataset, TrialModel& model) {
         usable = false;
         break;
       }
-      trace.channels.push_back(
-          {std::string(name), measured.unit, measured.values_si, predicted->values_si});
+      ChannelTrace channel{
+          std::string(name), measured.unit, measured.values_si, predicted->values_si, {}};
+      const Channel* spread = modelled.find(std::string(name) + "_spread");
+      if (spread != nullptr && spread->values_si.size() == measured.values_si.size()) {
+        channel.model_spread_si = spread->values_si;
+      }
+      trace.channels.push_back(std::move(channel));
     }
     if (!usable) continue;
     for (const ChannelTrace& c : trace.channels) {
       for (std::size_t k = 0; k < c.measured_si.size(); ++k) {
         const double m = c.measured_si[k];
         const double p = c.model_si[k];
+        const double s = c.model_spread_si.empty() ? 0.0 : c.model_spread_si[k];
         const double t = trace.time_s[k];
-        add(c.channel, "all", "", "", m, p, t);
-        add(c.channel, "trial " + trial.id, trial.id, "", m, p, t);
+        add(c.channel, "all", "", "", m, p, s, t);
+        add(c.channel, "trial " + trial.id, trial.id, "", m, p, s, t);
         if (trace.phase[k] != "all") {
-          add(c.channel, "phase " + trace.phase[k], "", trace.phase[k], m, p, t);
+          add(c.channel, "phase " + trace.phase[k], "", trace.phase[k], m, p, s, t);
           add(c.channel, "trial " + trial.id + ", " + trace.phase[k], trial.id, trace.phase[k], m,
-              p, t);
+              p, s, t);
         }
         for (const std::string& name : varying_conditions) {
           const auto found = trial.conditions.find(name);
           if (found == trial.conditions.end()) continue;
-          add(c.channel, name + "=" + condition_text(found->second), "", "", m, p, t);
+          add(c.channel, name + "=" + condition_text(found->second), "", "", m, p, s, t);
         }
       }
     }

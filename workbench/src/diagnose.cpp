@@ -38,6 +38,7 @@ struct FitContext {
   const model_tests::CommonParams* base = nullptr;
   const EffectCandidate* candidate = nullptr;
   const std::vector<std::size_t>* trials = nullptr;
+  const TwinSettings* twin = nullptr;
   int evaluations = 0;
   double best_rss = std::numeric_limits<double>::infinity();
 };
@@ -62,7 +63,7 @@ double objective(FitContext& context, const std::vector<double>& x) {
   const double rss = residuals(*context.dataset,
                                with_effect(*context.base, *context.candidate,
                                            context.dataset->experiment, x.data()),
-                               *context.trials)
+                               *context.trials, *context.twin)
                          .rss;
   context.best_rss = std::min(context.best_rss, rss);
   return rss;
@@ -73,7 +74,7 @@ CandidateResult fit(const Dataset& dataset, const model_tests::CommonParams& bas
                     const std::vector<std::size_t>& all_trials, std::size_t held_out,
                     const DiagnoseOptions& options) {
   const auto dimensions = static_cast<unsigned>(candidate.parameters.size());
-  FitContext context{&dataset, &base, &candidate, &fit_trials};
+  FitContext context{&dataset, &base, &candidate, &fit_trials, &options.twin};
   // Start from the best of the middle and the points a quarter in from the corners of the
   // (log) box: an effect can be flat over much of its range (a stick speed below the contacts'
   // creep hides any static friction), and a local search started on such a plateau stops
@@ -105,10 +106,11 @@ CandidateResult fit(const Dataset& dataset, const model_tests::CommonParams& bas
   }
   const model_tests::CommonParams fitted =
       with_effect(base, candidate, dataset.experiment, x.data());
-  const Residuals all = residuals(dataset, fitted, all_trials);
+  const Residuals all = residuals(dataset, fitted, all_trials, options.twin);
   result.rss = all.rss;
+  result.model_spread = std::sqrt(all.spread_ss / static_cast<double>(all.samples));
   result.bic = bic(all.rss, all.samples, dimensions);
-  const Residuals out = residuals(dataset, fitted, {held_out});
+  const Residuals out = residuals(dataset, fitted, {held_out}, options.twin);
   result.held_out_rmse = std::sqrt(out.rss / static_cast<double>(out.samples));
   return result;
 }
@@ -198,10 +200,11 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   Residuals base_all;
   for (std::size_t k = 0; k < all_trials.size(); ++k) {
     all_trials[k] = k;
-    const Residuals trial = residuals(dataset, base, {k});
+    const Residuals trial = residuals(dataset, base, {k}, options.twin);
     base_trial_rmse[k] = std::sqrt(trial.rss / static_cast<double>(trial.samples));
     base_all.rss += trial.rss;
     base_all.samples += trial.samples;
+    base_all.spread_ss += trial.spread_ss;
   }
   const std::size_t held_out = held_out_trial(dataset, base_trial_rmse);
   diagnosis.held_out_trial = dataset.trials[held_out].id;
@@ -213,6 +216,8 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   diagnosis.base_rmse = std::sqrt(base_all.rss / static_cast<double>(base_all.samples));
   diagnosis.base_bic = bic(base_all.rss, base_all.samples, 0);
   diagnosis.base_held_out_rmse = base_trial_rmse[held_out];
+  diagnosis.base_model_spread =
+      std::sqrt(base_all.spread_ss / static_cast<double>(base_all.samples));
   spdlog::info("diagnose: base model RMS {:.4g} (SI) over {} samples, held out '{}'",
                diagnosis.base_rmse, diagnosis.samples, diagnosis.held_out_trial);
 
@@ -264,6 +269,10 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
             << " % (held-out trial '" << diagnosis.held_out_trial << "' "
             << diagnosis.base_held_out_rmse << " -> " << best.held_out_rmse << "), BIC by "
             << -best.delta_bic;
+    if (best.model_spread > 0.0) {
+      verdict << "; the fitted ensemble's own spread is " << best.model_spread
+              << " (RMS), which adds to the noise";
+    }
   } else {
     verdict << "nothing missing among the candidates: base RMS " << diagnosis.base_rmse;
     if (diagnosis.noise_si > 0.0) verdict << " against noise " << diagnosis.noise_si;
@@ -291,6 +300,7 @@ std::string diagnosis_json(const Diagnosis& diagnosis) {
                       {"base_bic", diagnosis.base_bic},
                       {"held_out_trial", diagnosis.held_out_trial},
                       {"base_held_out_rmse_si", diagnosis.base_held_out_rmse},
+                      {"base_model_spread_si", diagnosis.base_model_spread},
                       {"verdict", diagnosis.verdict}};
   nlohmann::json ranked = nlohmann::json::array();
   for (const CandidateResult& r : diagnosis.ranked) {
@@ -301,6 +311,7 @@ std::string diagnosis_json(const Diagnosis& diagnosis) {
                       {"delta_bic", r.delta_bic},
                       {"held_out_rmse_si", r.held_out_rmse},
                       {"improvement", r.improvement},
+                      {"model_spread_si", r.model_spread},
                       {"proposed", r.proposed},
                       {"evaluations", r.evaluations}});
   }

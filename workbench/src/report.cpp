@@ -1,5 +1,7 @@
 #include "fl/workbench/report.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -48,6 +50,7 @@ std::string report_json(const CompareReport& report) {
                      {"max_abs_si", cell.max_abs_si},
                      {"max_abs_at", cell.max_abs_time_s},
                      {"noise_si", cell.noise_si},
+                     {"model_spread_si", cell.model_spread_si},
                      {"score", cell.score},
                      {"verdict", verdict(cell)}});
   }
@@ -62,6 +65,8 @@ std::string report_json(const CompareReport& report) {
       t["channels"][c.channel] = {{"unit", std::string(c.unit.symbol)},
                                   {"measured_si", c.measured_si},
                                   {"model_si", c.model_si}};
+      if (!c.model_spread_si.empty())
+        t["channels"][c.channel]["model_spread_si"] = c.model_spread_si;
     }
     traces.push_back(t);
   }
@@ -88,7 +93,8 @@ std::string report_html(const CompareReport& report) {
     html << "</ul>\n";
   }
   html << "<h2>Where it fails</h2>\n<p>Error per channel and group, worst first. Score: RMS "
-          "error in noise sigmas where the dataset gives the noise (fail above "
+          "error in noise sigmas where the dataset gives the noise, with the model's own spread "
+          "added to the noise where it runs an ensemble (fail above "
        << kFailScore << "), else in % of the RMS signal (fail above " << 100.0 * kFailShareNoNoise
        << " %).</p>\n<table><tr><th>channel</th><th>group</th><th>samples</th><th>RMS "
           "error</th><th>bias</th><th>largest</th><th>at</th><th>score</th></tr>\n";
@@ -124,19 +130,45 @@ std::string report_html(const CompareReport& report) {
         residual.push_back((c.model_si[k] - c.measured_si[k]) * to_unit);
       }
       const std::string y_label = c.channel + " (" + std::string(c.unit.symbol) + ")";
+      // Rows of several tracks interleaved in time (line tracks: every fillet at each frame)
+      // are drawn as points; a line through them would zigzag from fillet to fillet.
+      const bool one_track =
+          std::is_sorted(trace.time_s.begin(), trace.time_s.end()) &&
+          std::adjacent_find(trace.time_s.begin(), trace.time_s.end()) == trace.time_s.end();
       report::Plot overlay;
       overlay.title = trace.trial + ": " + c.channel;
       overlay.x.label = trace.x_label;
       overlay.y.label = y_label;
       overlay.series.push_back(
           {"measured", trace.time_s, measured, report::SeriesStyle::kScatter, "#444"});
-      overlay.series.push_back({"model", trace.time_s, model, report::SeriesStyle::kLine, "#d62"});
+      overlay.series.push_back(
+          {"model", trace.time_s, model,
+           one_track ? report::SeriesStyle::kLine : report::SeriesStyle::kScatter, "#d62"});
       report::Plot residuals;
       residuals.title = trace.trial + ": " + c.channel + " residual (model - measured)";
       residuals.x.label = trace.x_label;
       residuals.y.label = y_label;
       residuals.series.push_back(
-          {"residual", trace.time_s, residual, report::SeriesStyle::kLineAndMarkers, "#36c"});
+          {"residual", trace.time_s, residual,
+           one_track ? report::SeriesStyle::kLineAndMarkers : report::SeriesStyle::kScatter,
+           "#36c"});
+      if (!c.model_spread_si.empty()) {
+        // An ensemble's sigma at each row, noise and spread together: where the residuals of a
+        // right model would mostly lie.
+        double noise_si = 0.0;
+        for (const ErrorCell& cell : report.cells) {
+          if (cell.channel == c.channel && cell.group == "all") noise_si = cell.noise_si;
+        }
+        std::vector<double> low, high;
+        for (std::size_t k = 0; k < residual.size(); ++k) {
+          const double sigma = std::hypot(noise_si, c.model_spread_si[k]) * to_unit;
+          low.push_back(-sigma);
+          high.push_back(sigma);
+        }
+        residuals.series.push_back({"\u00b1 sigma: noise, spread", trace.time_s, high,
+                                    report::SeriesStyle::kScatter, "#f9a"});
+        residuals.series.push_back({"", trace.time_s, low, report::SeriesStyle::kScatter, "#f9a"});
+      }
       residuals.references.push_back({false, 0.0, ""});
       // The phase changes, so a reader sees which part of the test the error belongs to.
       for (std::size_t k = 1; k < trace.phase.size(); ++k) {

@@ -18,9 +18,10 @@ std::string_view judged_channel(ExperimentType type) {
 }
 
 Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& common,
-                    const std::vector<std::size_t>& trials) {
+                    const std::vector<std::size_t>& trials, const TwinSettings& settings) {
   const std::string_view channel = judged_channel(dataset.experiment);
-  const std::unique_ptr<TrialModel> model = make_twin_model(dataset.experiment, common);
+  const std::unique_ptr<TrialModel> model = make_twin_model(dataset.experiment, common, settings);
+  const std::string spread_channel = std::string(channel) + "_spread";
   Residuals r;
   for (const std::size_t index : trials) {
     const Trial& trial = dataset.trials[index];
@@ -30,6 +31,9 @@ Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& com
     for (std::size_t k = 0; k < measured.size(); ++k) {
       const double e = modelled[k] - measured[k];
       r.rss += e * e;
+    }
+    if (const Channel* spread = predicted.find(spread_channel); spread != nullptr) {
+      for (const double s : spread->values_si) r.spread_ss += s * s;
     }
     r.samples += measured.size();
   }

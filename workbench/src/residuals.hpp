@@ -9,6 +9,7 @@
 
 #include "fl/twin/model_tests/fixtures.hpp"
 #include "fl/workbench/dataset.hpp"
+#include "fl/workbench/twin_models.hpp"
 
 namespace fl::workbench::detail {
 
@@ -20,12 +21,14 @@ std::string_view judged_channel(ExperimentType type);
 struct Residuals {
   double rss = 0.0;
   std::size_t samples = 0;
+  // Sum of the squared spread of an ensemble twin over the same rows (0 for one run).
+  double spread_ss = 0.0;
 };
 
 // Sum of squared residuals of the judged channel over the chosen trials, the twin built from
-// `common`. Throws what the twin throws for a trial it cannot run.
+// `common` and `settings`. Throws what the twin throws for a trial it cannot run.
 Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& common,
-                    const std::vector<std::size_t>& trials);
+                    const std::vector<std::size_t>& trials, const TwinSettings& settings = {});
 
 using UnitBoxObjective = std::function<double(const std::vector<double>&)>;
 

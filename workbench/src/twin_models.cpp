@@ -1,11 +1,13 @@
 #include "fl/workbench/twin_models.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <memory>
 #include <numbers>
 #include <optional>
+#include <random>
 #include <sstream>
 #include <stdexcept>
 
@@ -345,18 +347,53 @@ Table TwinBulkFlowModel::run(const Dataset& dataset, const Trial& trial) {
   return single_channel_answer(trial, "outflow", std::move(outflow_kg_per_s));
 }
 
-TwinLineTracksModel::TwinLineTracksModel(model_tests::CommonParams common)
-    : common_(std::move(common)) {
+TwinLineTracksModel::TwinLineTracksModel(model_tests::CommonParams common,
+                                         LineTracksSettings settings)
+    : common_(std::move(common)), settings_(settings) {
   if (common_.base_spec.materials.empty()) common_.base_spec = dem::appendix_b_model_spec();
+  if (settings_.ensemble_runs < 1) {
+    throw std::invalid_argument("the line-tracks model needs one run or more per trial, not " +
+                                std::to_string(settings_.ensemble_runs));
+  }
 }
 
 std::string TwinLineTracksModel::describe() const {
   std::ostringstream text;
   text << "DEM twin, flexible fillets of " << common_.sub_particle_radius_m * 1e3
-       << " mm sub-particles on a commanded belt; fillet-equipment laws:";
-  text << equipment_chain_text(common_.base_spec);
+       << " mm sub-particles on a commanded belt";
+  if (settings_.ensemble_runs > 1) {
+    text << ", mean of " << settings_.ensemble_runs << " runs from first poses within the noise";
+  }
+  text << "; fillet-equipment laws:" << equipment_chain_text(common_.base_spec);
   return text.str();
 }
+
+namespace {
+
+// The jitter's seed for one trial: FNV-1a over its id, so that it does not hang on the trial's
+// place in the dataset or on the standard library's hash.
+std::uint64_t trial_seed(std::uint64_t seed, const std::string& id) {
+  std::uint64_t hash = 1469598103934665603ULL ^ seed;
+  for (const char c : id) {
+    hash ^= static_cast<unsigned char>(c);
+    hash *= 1099511628211ULL;
+  }
+  return hash;
+}
+
+// The 1-sigma noise of a line-tracks channel, for the ensemble's jitter.
+double track_noise_si(const Dataset& dataset, std::string_view channel) {
+  const auto found = dataset.noise_si.find(channel);
+  if (found == dataset.noise_si.end() || !(found->second > 0.0)) {
+    throw std::runtime_error(
+        "the line-tracks ensemble jitters the first poses by the noise, and "
+        "the dataset gives none for '" +
+        std::string(channel) + "'");
+  }
+  return found->second;
+}
+
+}  // namespace
 
 Table TwinLineTracksModel::run(const Dataset& dataset, const Trial& trial) {
   require_experiment(dataset, ExperimentType::kLineTracks, "line-tracks");
@@ -398,31 +435,78 @@ Table TwinLineTracksModel::run(const Dataset& dataset, const Trial& trial) {
     if (added) params.first_poses.push_back({x[row], y[row], angle[row]});
     params.samples.push_back({found->second, time[row]});
   }
-  const model_tests::BeltTracksResult result = model_tests::run_belt_tracks(params);
-  if (result.poses.size() != order.size()) {
-    throw std::runtime_error("the line-tracks model became unstable after " +
-                             std::to_string(result.poses.size()) + " of " +
-                             std::to_string(order.size()) + " rows");
+  const int runs = settings_.ensemble_runs;
+  const std::vector<model_tests::BeltPose> measured_first = params.first_poses;
+  std::array<double, 3> jitter_sigma{0.0, 0.0, 0.0};
+  if (runs > 1) {
+    jitter_sigma = {track_noise_si(dataset, "x"), track_noise_si(dataset, "y"),
+                    track_noise_si(dataset, "angle")};
   }
-  Table table;
-  table.channels = {{"x", trial.data.at("x").unit, std::vector<double>(order.size())},
-                    {"y", trial.data.at("y").unit, std::vector<double>(order.size())},
-                    {"angle", trial.data.at("angle").unit, std::vector<double>(order.size())}};
+  std::mt19937_64 random(trial_seed(settings_.seed, trial.id));
+  std::normal_distribution<double> standard_normal(0.0, 1.0);
+  // Sums over the members of each channel's value and square, per row (Welford would be
+  // steadier, but a few runs of positions within metres lose nothing to this).
+  std::array<std::vector<double>, 3> sum, sum_sq;
+  for (auto& s : sum) s.assign(order.size(), 0.0);
+  for (auto& s : sum_sq) s.assign(order.size(), 0.0);
   constexpr double kTurn = 2.0 * std::numbers::pi;
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    const std::size_t row = order[k];
-    const model_tests::BeltPose& pose = result.poses[k];
-    table.channels[0].values_si[row] = pose.x_m;
-    table.channels[1].values_si[row] = pose.y_m;
-    table.channels[2].values_si[row] =
-        pose.yaw_rad + kTurn * std::round((angle[row] - pose.yaw_rad) / kTurn);
+  for (int member = 0; member < runs; ++member) {
+    if (runs > 1) {
+      for (std::size_t f = 0; f < measured_first.size(); ++f) {
+        params.first_poses[f].x_m =
+            measured_first[f].x_m + jitter_sigma[0] * standard_normal(random);
+        params.first_poses[f].y_m =
+            measured_first[f].y_m + jitter_sigma[1] * standard_normal(random);
+        params.first_poses[f].yaw_rad =
+            measured_first[f].yaw_rad + jitter_sigma[2] * standard_normal(random);
+      }
+    }
+    const model_tests::BeltTracksResult result = model_tests::run_belt_tracks(params);
+    if (result.poses.size() != order.size()) {
+      throw std::runtime_error("the line-tracks model became unstable after " +
+                               std::to_string(result.poses.size()) + " of " +
+                               std::to_string(order.size()) + " rows");
+    }
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      const std::size_t row = order[k];
+      const model_tests::BeltPose& pose = result.poses[k];
+      const std::array<double, 3> value{
+          pose.x_m, pose.y_m,
+          pose.yaw_rad + kTurn * std::round((angle[row] - pose.yaw_rad) / kTurn)};
+      for (std::size_t c = 0; c < 3; ++c) {
+        sum[c][row] += value[c];
+        sum_sq[c][row] += value[c] * value[c];
+      }
+    }
+  }
+  static constexpr std::array<std::string_view, 3> kChannels{"x", "y", "angle"};
+  Table table;
+  const auto n = static_cast<double>(runs);
+  for (std::size_t c = 0; c < 3; ++c) {
+    const Unit unit = trial.data.at(kChannels[c]).unit;
+    std::vector<double> mean(order.size());
+    for (std::size_t row = 0; row < order.size(); ++row) mean[row] = sum[c][row] / n;
+    table.channels.push_back({std::string(kChannels[c]), unit, mean});
+  }
+  if (runs > 1) {
+    for (std::size_t c = 0; c < 3; ++c) {
+      std::vector<double> spread(order.size());
+      for (std::size_t row = 0; row < order.size(); ++row) {
+        const double mean = sum[c][row] / n;
+        const double variance = std::max(0.0, (sum_sq[c][row] - n * mean * mean) / (n - 1.0));
+        spread[row] = std::sqrt(variance * (1.0 + 1.0 / n));
+      }
+      table.channels.push_back(
+          {std::string(kChannels[c]) + "_spread", trial.data.at(kChannels[c]).unit, spread});
+    }
   }
   table.lines = trial.data.lines;
   return table;
 }
 
 std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
-                                            const model_tests::CommonParams& common) {
+                                            const model_tests::CommonParams& common,
+                                            const TwinSettings& settings) {
   switch (experiment) {
     case ExperimentType::kCompress:
       return std::make_unique<TwinCompressModel>(common);
@@ -434,7 +518,7 @@ std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
     case ExperimentType::kBend:
       return std::make_unique<TwinBendModel>(common);
     case ExperimentType::kLineTracks:
-      return std::make_unique<TwinLineTracksModel>(common);
+      return std::make_unique<TwinLineTracksModel>(common, settings.line_tracks);
     case ExperimentType::kBulkFlow:
       return std::make_unique<TwinBulkFlowModel>(common);
   }

@@ -50,8 +50,8 @@ Trial make_trial(const std::string& id, const std::function<double(double, doubl
 // A linear spring, optionally offset: its error against a dataset is known in closed form.
 class SpringModel final : public TrialModel {
  public:
-  explicit SpringModel(double offset_n = 0.0, std::string refuse = {})
-      : offset_n_(offset_n), refuse_(std::move(refuse)) {}
+  explicit SpringModel(double offset_n = 0.0, std::string refuse = {}, double spread_n = 0.0)
+      : offset_n_(offset_n), refuse_(std::move(refuse)), spread_n_(spread_n) {}
   [[nodiscard]] std::string describe() const override { return "linear spring"; }
   Table run(const Dataset& /*dataset*/, const Trial& trial) override {
     if (trial.id == refuse_) throw std::runtime_error("variant not supported");
@@ -61,12 +61,18 @@ class SpringModel final : public TrialModel {
     }
     Table table;
     table.channels = {channel("force", "N", force)};
+    // As an ensemble answers: its own spread per row beside the mean.
+    if (spread_n_ > 0.0) {
+      table.channels.push_back(
+          channel("force_spread", "N", std::vector<double>(force.size(), spread_n_)));
+    }
     return table;
   }
 
  private:
   double offset_n_;
   std::string refuse_;
+  double spread_n_;
 };
 
 Dataset make_dataset(std::vector<Trial> trials) {
@@ -101,6 +107,23 @@ TEST(Compare, ConstantOffsetGivesExactErrorAndScore) {
   EXPECT_NEAR(all.score, 0.1 / kForceNoiseN, 1e-9);  // 5 sigma
   ASSERT_EQ(report.traces.size(), 1U);
   EXPECT_EQ(report.traces[0].channels[0].model_si.size(), 21U);
+}
+
+TEST(Compare, AnEnsemblesSpreadAddsToTheNoise) {
+  const Dataset data = make_dataset({make_trial("a", spring)});
+  // A spread of sqrt(3) noise sigmas: with the noise, 2 sigmas in all, so an error of 0.1 N
+  // (5 noise sigmas) scores 2.5.
+  SpringModel model(0.1, {}, std::sqrt(3.0) * kForceNoiseN);
+  const CompareReport report = compare(data, model);
+  const ErrorCell& all = report.overall("force");
+  EXPECT_NEAR(all.rmse_si, 0.1, 1e-12);
+  EXPECT_NEAR(all.model_spread_si, std::sqrt(3.0) * kForceNoiseN, 1e-12);
+  EXPECT_NEAR(all.score, 2.5, 1e-9);
+  ASSERT_EQ(report.traces.size(), 1U);
+  EXPECT_EQ(report.traces[0].channels[0].model_spread_si.size(), 21U);
+  // A model with no spread channel has none.
+  SpringModel single(0.1);
+  EXPECT_EQ(compare(data, single).overall("force").model_spread_si, 0.0);
 }
 
 TEST(Compare, RelaxationDuringHoldRanksTheHoldPhaseWorst) {

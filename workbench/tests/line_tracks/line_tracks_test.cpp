@@ -2,7 +2,8 @@
 // carries a fillet at the belt's speed, leaves it behind on a takt harder than its friction
 // holds (against a rigid block's lag), refuses what it cannot run; the generator writes the
 // belt command logs and its hidden wet film fails the base model while the truth sits at the
-// noise. Five 7 mm fillets on a belt for 1.2 s take about 0.4 s.
+// noise; a hidden resting friction, which makes one run's track turn on less than the noise, is
+// told apart by an ensemble of runs. Five 7 mm fillets on a belt for 1.2 s take about 0.4 s.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -79,6 +80,50 @@ TEST(LineTracksTwin, ASteadyBeltCarriesTheFilletAtItsSpeed) {
     EXPECT_NEAR(y[k], 0.02, 0.001) << "at " << t[k] << " s";
     EXPECT_NEAR(angle[k], angle[0], std::numbers::pi / 180.0) << "at " << t[k] << " s";
   }
+}
+
+TEST(LineTracksTwin, AnEnsembleStartsWithinTheNoiseAndReportsItsSpread) {
+  Trial trial = one_fillet_trial(0.2);
+  trial.conditions["belt_speed"] = 0.5;
+  Dataset data = tracks_dataset(trial);
+  data.noise_si = {{"x", 0.001}, {"y", 0.001}, {"angle", std::numbers::pi / 180.0}};
+  constexpr int kRuns = 8;
+  TwinLineTracksModel model(base_model(), LineTracksSettings{kRuns, 7});
+  const Table track = model.run(data, data.trials[0]);
+  const auto& x = track.at("x").values_si;
+  const auto& x_spread = track.at("x_spread").values_si;
+  ASSERT_EQ(x_spread.size(), x.size());
+  ASSERT_EQ(track.at("angle_spread").values_si.size(), x.size());
+  // Each member appears where its jittered first pose says, so the first row's mean and spread
+  // are those of 8 draws of 1 mm noise: the mean within 3 sigma / sqrt(8) = 1.1 mm of the
+  // measured 0, the spread (sample sigma times sqrt(1 + 1/8)) within the 99.8 % range of a
+  // sample sigma of 8 draws, 0.35 to 1.75 sigma, times 1.06.
+  EXPECT_LT(std::abs(x[0]), 0.0011);
+  EXPECT_GT(x_spread[0], 0.35 * 1.06e-3);
+  EXPECT_LT(x_spread[0], 1.75 * 1.06e-3);
+  // A steady belt carries every member's offset along unchanged (each settles by well under
+  // a millimetre, the single-run test's bound), so the spread stays within 0.5 mm of the
+  // first row's.
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    EXPECT_NEAR(x_spread[k], x_spread[0], 0.0005) << "row " << k;
+  }
+  // The jitter is drawn from the seed and the trial: the same answer again, to the bit.
+  EXPECT_EQ(model.run(data, data.trials[0]).at("x").values_si, x);
+}
+
+TEST(LineTracksTwin, AnEnsembleNeedsTheNoiseItJittersBy) {
+  Trial trial = one_fillet_trial(0.1);
+  trial.conditions["belt_speed"] = 0.5;
+  Dataset data = tracks_dataset(trial);
+  data.noise_si = {{"x", 0.001}, {"y", 0.001}};  // no angle noise
+  TwinLineTracksModel model(base_model(), LineTracksSettings{4, 1});
+  try {
+    (void)model.run(data, data.trials[0]);
+    FAIL() << "an ensemble ran without the angle's noise";
+  } catch (const std::runtime_error& error) {
+    EXPECT_NE(std::string(error.what()).find("'angle'"), std::string::npos) << error.what();
+  }
+  EXPECT_THROW(TwinLineTracksModel(base_model(), LineTracksSettings{0, 1}), std::invalid_argument);
 }
 
 // Where the belt has carried a point of it by the end of the trial.
@@ -175,6 +220,31 @@ TEST(LineTracksGenerator, AHiddenWetFilmFailsTheBaseModelAndNotTheTruth) {
   EXPECT_NEAR(score(made.truth), 1.0, 0.1);
   // A film of 30 % or more lets the fillets slip centimetres on every wet takt.
   EXPECT_GT(score({}), 10.0);
+}
+
+TEST(LineTracksGenerator, AnEnsembleTellsAHiddenStaticFrictionWhereOneRunCannot) {
+  // Seed 3 hides mu_s 0.81175 (stick speed 13.7 mm/s) against the sliding 0.5: the 7 m/s^2
+  // takts ask for 0.71 g, so whether each contact sticks or slips is close.
+  const GeneratedDataset made = generate_tracks("static_kinetic_friction", 3);
+  ASSERT_EQ(made.truth.law, "static_kinetic_friction");
+  HiddenEffect nudged = made.truth;
+  nudged.parameters["static_friction_coefficient"] += 3e-4;  // 0.04 %: far inside any fit
+  const auto score = [&made](const HiddenEffect& effect, int runs) {
+    model_tests::CommonParams common = base_model();
+    common.base_spec = with_contact_effect(common.base_spec, effect);
+    TwinLineTracksModel model(common, LineTracksSettings{runs, 1});
+    return compare(made.dataset, model).overall("x").score;
+  };
+  // One run: the truth starts where the generator's did and scores 1 (0.1: as the wet film
+  // above), but the nudged truth falls off the noise (1.86 seen): no fit can come that close.
+  EXPECT_NEAR(score(made.truth, 1), 1.0, 0.1);
+  EXPECT_GT(score(nudged, 1), 1.5);
+  // Eight runs from first poses within the noise: truth and nudged truth both within the noise
+  // and the spread (0.72 and 0.74 seen; 1.2 leaves room for the 8 runs' own scatter), and the
+  // base model beyond twice that (2.39 seen): the effect shows, the nudge does not.
+  EXPECT_LT(score(made.truth, 8), 1.2);
+  EXPECT_LT(score(nudged, 8), 1.2);
+  EXPECT_GT(score({}, 8), 2.0);
 }
 
 }  // namespace

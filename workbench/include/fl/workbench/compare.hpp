@@ -43,6 +43,9 @@ struct ChannelTrace {
   Unit unit;  // the measurement's, for plots in the user's units
   std::vector<double> measured_si;
   std::vector<double> model_si;
+  // The model's own spread per row, 1 sigma, when it answers a "<channel>_spread" channel (an
+  // ensemble: TwinLineTracksModel); empty otherwise.
+  std::vector<double> model_spread_si;
 };
 
 struct TrialTrace {
@@ -66,7 +69,11 @@ struct ErrorCell {
   double max_abs_si = 0.0;
   double max_abs_time_s = 0.0;  // where the largest residual is (time or row)
   double noise_si = 0.0;        // the dataset's 1-sigma noise; 0 when not given
-  // rmse / noise when the noise is known, else rmse / rms(measured): how bad, comparable
+  // The model's own spread over the rows (RMS of its per-row 1 sigma); 0 without an ensemble.
+  double model_spread_si = 0.0;
+  // The RMS of the residuals each in its row's sigma, sqrt(noise^2 + the model's spread there^2),
+  // when the noise is known (rmse / noise for a single run; 1: the model is as right as the
+  // noise and its own spread let anyone tell), else rmse / rms(measured): how bad, comparable
   // across channels. Cells are ranked by it.
   double score = 0.0;
 };

@@ -13,6 +13,7 @@
 #include "fl/twin/model_tests/fixtures.hpp"
 #include "fl/workbench/dataset.hpp"
 #include "fl/workbench/generator.hpp"
+#include "fl/workbench/twin_models.hpp"
 
 namespace fl::workbench {
 
@@ -48,6 +49,7 @@ struct CandidateResult {
   double delta_bic = 0.0;      // against the base model (< 0: better)
   double held_out_rmse = 0.0;  // on the trial left out of the fit
   double improvement = 0.0;    // 1 - rmse / base rmse, all trials
+  double model_spread = 0.0;   // an ensemble twin's own spread, RMS over all trials (else 0)
   bool proposed = false;
   int evaluations = 0;
 };
@@ -59,6 +61,7 @@ struct Diagnosis {
   double base_bic = 0.0;
   double base_held_out_rmse = 0.0;
   double noise_si = 0.0;
+  double base_model_spread = 0.0;  // the base ensemble's own spread, RMS (one run: 0)
   std::string held_out_trial;
   std::vector<CandidateResult> ranked;  // best (lowest BIC) first
   // "bpm_viscoelastic explains it: ..." or "nothing missing: ...".
@@ -72,6 +75,9 @@ struct DiagnoseOptions {
   // the held-out error falls by more than min_held_out_gain.
   double min_bic_drop = 10.0;
   double min_held_out_gain = 0.2;
+  // How the twins run: line tracks may run an ensemble per trial (LineTracksSettings), whose
+  // mean is fitted: one run's track can hang on a stick or slip that the noise decides.
+  TwinSettings twin;
 };
 
 // The trial a fit on the others must predict. With rates: the fastest (the first of equals),

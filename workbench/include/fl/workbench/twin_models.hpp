@@ -4,6 +4,7 @@
 // model is a change of that spec (config/dem.yaml), not of this code.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 
 #include "fl/twin/dem_bulk/bulk_scene.hpp"
@@ -129,26 +130,48 @@ class TwinBulkFlowModel final : public TrialModel {
   BulkFlowSettings settings_;
 };
 
+// How the line-tracks twin answers. Whether a fillet's contacts stick or slip on a hard takt can
+// turn on less than the camera's error on where the fillet first appeared (a resting friction
+// near the takt's mu g: docs/measurements.md), and then one run from the measured first poses
+// says little. With ensemble_runs > 1 the twin runs that many times, each from the first poses
+// jittered by the dataset's noise on x, y and angle (the camera's error on them), and answers
+// the members' mean, with their spread per row as the channels x_spread, y_spread and
+// angle_spread: how far one more run would lie from that mean, 1 sigma (the members' sample
+// standard deviation times sqrt(1 + 1/runs)), which compare adds to the noise. The jitter is drawn
+// from `seed` and the trial's id, so the same dataset gets the same answer.
+struct LineTracksSettings {
+  int ensemble_runs = 1;
+  std::uint64_t seed = 1;
+};
+
 // Line tracks (the line's cameras following fillets on a belt): every fillet of the trial
 // appears at its first row's pose (x, y, angle: the yaw of its long axis), lying flat and moving
 // with the belt, on one belt of the equipment material driven by the trial's command log (the
 // first speed column, linear between rows; no log: the belt_speed condition); the answer is each
 // fillet's centre and yaw at each of its rows. The angle is the nearest turn to the measured
 // one (a camera's angle is wrapped, the twin's is not). Variant, mirrored and surface as the
-// slide model (a wet_film acts on surface=wet trials only).
+// slide model (a wet_film acts on surface=wet trials only). An ensemble (LineTracksSettings)
+// needs the dataset's noise on x, y and angle; without it the run is refused.
 class TwinLineTracksModel final : public TrialModel {
  public:
-  explicit TwinLineTracksModel(model_tests::CommonParams common);
+  explicit TwinLineTracksModel(model_tests::CommonParams common, LineTracksSettings settings = {});
   [[nodiscard]] std::string describe() const override;
   Table run(const Dataset& dataset, const Trial& trial) override;
 
  private:
   model_tests::CommonParams common_;
+  LineTracksSettings settings_;
+};
+
+// What make_twin_model's twins take besides the engine model: none but line tracks so far.
+struct TwinSettings {
+  LineTracksSettings line_tracks;
 };
 
 // The twin of an experiment type (every type of the measurement format): what compare, diagnose
 // and the generator run.
 std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
-                                            const model_tests::CommonParams& common);
+                                            const model_tests::CommonParams& common,
+                                            const TwinSettings& settings = {});
 
 }  // namespace fl::workbench
