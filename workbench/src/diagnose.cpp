@@ -261,6 +261,33 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   for (std::size_t k = 1; k < results.size(); ++k) results[k].proposed = false;
   diagnosis.ranked = std::move(results);
 
+  // Line tracks from one run a trial: would the tracks move if the first poses moved within
+  // the noise? A probe ensemble of the base model and of the best fit says.
+  const bool probe_first_poses = dataset.experiment == ExperimentType::kLineTracks &&
+                                 options.twin.line_tracks.ensemble_runs == 1 &&
+                                 diagnosis.noise_si > 0.0 && dataset.noise_si.contains("y") &&
+                                 dataset.noise_si.contains("angle");
+  if (probe_first_poses) {
+    TwinSettings probe = options.twin;
+    probe.line_tracks.ensemble_runs = kFirstPoseProbeRuns;
+    const auto spread_of = [&](const model_tests::CommonParams& model) {
+      const Residuals r = residuals(dataset, model, all_trials, probe);
+      return std::sqrt(r.spread_ss / static_cast<double>(r.samples));
+    };
+    diagnosis.base_first_pose_spread = spread_of(base);
+    if (!diagnosis.ranked.empty()) {
+      const CandidateResult& best = diagnosis.ranked.front();
+      HiddenEffect effect{best.law, best.fitted};
+      model_tests::CommonParams fitted = base;
+      fitted.base_spec = with_experiment_effect(base.base_spec, dataset.experiment, effect);
+      diagnosis.best_first_pose_spread = spread_of(fitted);
+    }
+    spdlog::info(
+        "diagnose: first poses within the noise move the tracks by {:.3g} (base) and "
+        "{:.3g} (best fit), RMS",
+        diagnosis.base_first_pose_spread, diagnosis.best_first_pose_spread);
+  }
+
   std::ostringstream verdict;
   verdict.precision(3);
   if (!diagnosis.ranked.empty() && diagnosis.ranked.front().proposed) {
@@ -278,6 +305,14 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
     if (diagnosis.noise_si > 0.0) verdict << " against noise " << diagnosis.noise_si;
     verdict << "; no effect lowers the BIC by " << options.min_bic_drop
             << " and the held-out error by " << 100.0 * options.min_held_out_gain << " %";
+  }
+  const double first_pose_spread =
+      std::max(diagnosis.base_first_pose_spread, diagnosis.best_first_pose_spread);
+  if (first_pose_spread > 2.0 * diagnosis.noise_si && diagnosis.noise_si > 0.0) {
+    verdict << ". But the tracks hang on stick or slip: first poses moved within the noise move "
+               "them by "
+            << first_pose_spread << " RMS (" << first_pose_spread / diagnosis.noise_si
+            << " noise sigmas), so one run a trial fits chance; diagnose again with --ensemble 8";
   }
   diagnosis.verdict = verdict.str();
   return diagnosis;
@@ -301,6 +336,8 @@ std::string diagnosis_json(const Diagnosis& diagnosis) {
                       {"held_out_trial", diagnosis.held_out_trial},
                       {"base_held_out_rmse_si", diagnosis.base_held_out_rmse},
                       {"base_model_spread_si", diagnosis.base_model_spread},
+                      {"base_first_pose_spread_si", diagnosis.base_first_pose_spread},
+                      {"best_first_pose_spread_si", diagnosis.best_first_pose_spread},
                       {"verdict", diagnosis.verdict}};
   nlohmann::json ranked = nlohmann::json::array();
   for (const CandidateResult& r : diagnosis.ranked) {

@@ -43,5 +43,34 @@ TEST(LineTracksDiagnose, ProposesNothingWhenResidualsAreAtTheNoise) {
   test::expect_nothing_proposed(generate_tracks("none", 63).dataset);
 }
 
+TEST(LineTracksDiagnose, ProbesHowFarTheFirstPosesMoveTheTracks) {
+  // One fillet a trial and one cheap candidate: the probe, not the fit, is under test.
+  GeneratorOptions options;
+  options.experiment = ExperimentType::kLineTracks;
+  options.effect = "none";
+  options.seed = 5;
+  options.fillets_per_trial = 1;
+  options.common = base_model();
+  const Dataset data = generate_dataset(options).dataset;
+  const std::vector<EffectCandidate> candidates{{"wet_film", {{"lubrication", 0.0, 0.95, false}}}};
+  DiagnoseOptions quick;
+  quick.max_evaluations = 2;
+  const Diagnosis single = diagnose(data, base_model(), candidates, quick);
+  // First poses jittered by 1 mm move every later position by that much at least: a spread of
+  // at least half the noise (4 runs' sample sigma is rarely below half the true one).
+  EXPECT_GT(single.base_first_pose_spread, 0.5 * single.noise_si);
+  EXPECT_GT(single.best_first_pose_spread, 0.5 * single.noise_si);
+  const bool hinted = single.verdict.find("--ensemble") != std::string::npos;
+  EXPECT_EQ(hinted, std::max(single.base_first_pose_spread, single.best_first_pose_spread) >
+                        2.0 * single.noise_si)
+      << single.verdict;
+  // An ensemble diagnosis needs no probe: its spread is in the score already.
+  quick.twin.line_tracks.ensemble_runs = 2;
+  const Diagnosis ensemble = diagnose(data, base_model(), candidates, quick);
+  EXPECT_EQ(ensemble.base_first_pose_spread, 0.0);
+  EXPECT_GT(ensemble.base_model_spread, 0.0);
+  EXPECT_EQ(ensemble.verdict.find("--ensemble"), std::string::npos) << ensemble.verdict;
+}
+
 }  // namespace
 }  // namespace fl::workbench

@@ -62,11 +62,20 @@ struct Diagnosis {
   double base_held_out_rmse = 0.0;
   double noise_si = 0.0;
   double base_model_spread = 0.0;  // the base ensemble's own spread, RMS (one run: 0)
+  // Line tracks diagnosed from one run a trial: how far the tracks of the base model and of
+  // the best-ranked fit move, RMS, when the first poses move within the noise (a probe of
+  // kFirstPoseProbeRuns runs each). Beyond twice the noise the tracks hang on stick or slip,
+  // and the verdict says to use an ensemble. 0 when not probed.
+  double base_first_pose_spread = 0.0;
+  double best_first_pose_spread = 0.0;
   std::string held_out_trial;
   std::vector<CandidateResult> ranked;  // best (lowest BIC) first
   // "bpm_viscoelastic explains it: ..." or "nothing missing: ...".
   std::string verdict;
 };
+
+// Runs of the first-pose probe of a line-track diagnosis from one run a trial (Diagnosis).
+inline constexpr int kFirstPoseProbeRuns = 4;
 
 struct DiagnoseOptions {
   int max_evaluations = 100;  // per candidate
