@@ -143,6 +143,9 @@ CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args) {
       ->check(CLI::Range(0.0, 50.0));
   generate->add_option("--fillets", args.fillets_per_trial, "line_tracks: fillets per trial")
       ->check(CLI::Range(1, 100));
+  generate->add_flag("--truth-from-true-pose", args.truth_starts_at_true_pose,
+                     "line_tracks: the truth starts at each fillet's true first pose, which the "
+                     "camera sees with noise like any other row (as on a real line)");
   return dataset;
 }
 
@@ -157,6 +160,7 @@ int generate_command(const GenerateArgs& args) {
   options.bend_angle_noise_deg = args.bend_angle_noise_deg;
   options.position_noise_mm = args.position_noise_mm;
   options.fillets_per_trial = args.fillets_per_trial;
+  options.truth_starts_at_true_pose = args.truth_starts_at_true_pose;
   options.common.base_spec = dem::load_model_spec(default_config("dem.yaml"));
   const GeneratedDataset made = generate_dataset(options);
   write_dataset(made.dataset, args.out);

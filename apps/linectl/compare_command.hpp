@@ -44,6 +44,7 @@ struct GenerateArgs {
   double bend_angle_noise_deg = 1.0;
   double position_noise_mm = 1.0;
   int fillets_per_trial = 5;
+  bool truth_starts_at_true_pose = false;
 };
 
 struct CalibrateArgs {

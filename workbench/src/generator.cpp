@@ -416,7 +416,9 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
       const auto first_row = [&time](std::size_t row) { return time[row] == time.front(); };
       const std::array<std::pair<std::size_t, std::normal_distribution<double>*>, 3> noisy{
           {{2, &noise}, {3, &noise}, {4, &angle_noise}}};  // x, y, angle
+      const bool seen_after_start = options.truth_starts_at_true_pose;
       for (const auto& [column, distribution] : noisy) {
+        if (seen_after_start) break;  // the truth starts clean; every row gets noise below
         std::vector<double>& values = trial.data.channels[column].values_si;
         for (std::size_t row = 0; row < values.size(); ++row) {
           if (first_row(row) && distribution->stddev() > 0.0)
@@ -429,7 +431,7 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
         const std::vector<double>& modelled =
             response.at(trial.data.channels[column].name).values_si;
         for (std::size_t row = 0; row < values.size(); ++row) {
-          if (first_row(row)) continue;
+          if (first_row(row) && !seen_after_start) continue;
           values[row] = modelled[row];
           if (distribution->stddev() > 0.0) values[row] += (*distribution)(random);
         }

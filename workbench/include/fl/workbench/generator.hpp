@@ -49,6 +49,11 @@ struct GeneratorOptions {
   double position_noise_mm = 1.0;
   double track_angle_noise_deg = 1.0;
   int fillets_per_trial = 5;
+  // Line tracks: where the truth starts. false: at each fillet's first row, noise and all, so a
+  // twin started there can match the truth to the noise. true: at the fillet's true first pose,
+  // which the camera saw with noise like every other row, as on a real line: then no twin
+  // knows where the fillet really was (docs/measurements.md, the ensemble).
+  bool truth_starts_at_true_pose = false;
   // Compress: loading rates 1x, 2x, 4x, ... Slide: fillet variants in turn (144x72x40,
   // 172x72x32, 176x72x40), each dry then wet, so the last of an even count is wet. 0: the
   // experiment's default (compress 3, slide 4). Drop: heights 50, 100, 200 mm, ... (doubling)
