@@ -143,6 +143,11 @@ CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args) {
       ->check(CLI::Range(0.0, 50.0));
   generate->add_option("--fillets", args.fillets_per_trial, "line_tracks: fillets per trial")
       ->check(CLI::Range(1, 100));
+  generate
+      ->add_option("--trials", args.trials,
+                   "trials (0: the experiment's default; line_tracks: takts of 4 and 7 m/s^2 "
+                   "in turn, each dry then wet)")
+      ->check(CLI::Range(0, 64));
   generate->add_flag("--truth-from-true-pose", args.truth_starts_at_true_pose,
                      "line_tracks: the truth starts at each fillet's true first pose, which the "
                      "camera sees with noise like any other row (as on a real line)");
@@ -161,6 +166,7 @@ int generate_command(const GenerateArgs& args) {
   options.position_noise_mm = args.position_noise_mm;
   options.fillets_per_trial = args.fillets_per_trial;
   options.truth_starts_at_true_pose = args.truth_starts_at_true_pose;
+  options.trials = args.trials;
   options.common.base_spec = dem::load_model_spec(default_config("dem.yaml"));
   const GeneratedDataset made = generate_dataset(options);
   write_dataset(made.dataset, args.out);

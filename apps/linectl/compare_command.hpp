@@ -45,6 +45,7 @@ struct GenerateArgs {
   double position_noise_mm = 1.0;
   int fillets_per_trial = 5;
   bool truth_starts_at_true_pose = false;
+  int trials = 0;  // 0: the experiment's default
 };
 
 struct CalibrateArgs {
