@@ -91,17 +91,13 @@ std::optional<TwinSettings> twin_settings(const CompareArgs& args, const Dataset
                   to_string(dataset.experiment));
     return std::nullopt;
   }
-  if (args.ensemble > 1) {
-    for (const std::string_view channel : {"x", "y", "angle"}) {
-      const auto noise = dataset.noise_si.find(channel);
-      if (noise == dataset.noise_si.end() || !(noise->second > 0.0)) {
-        spdlog::error(
-            "{}: --ensemble jitters the first poses by the manifest's noise, and it gives none "
-            "for '{}'",
-            args.dataset, channel);
-        return std::nullopt;
-      }
-    }
+  if (const std::string_view unknown = line_tracks_channel_without_noise(dataset);
+      args.ensemble > 1 && !unknown.empty()) {
+    spdlog::error(
+        "{}: --ensemble jitters the first poses by the manifest's noise, and it gives none for "
+        "'{}'",
+        args.dataset, unknown);
+    return std::nullopt;
   }
   settings.line_tracks.ensemble_runs = args.ensemble;
   return settings;

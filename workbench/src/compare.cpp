@@ -162,16 +162,19 @@ CompareReport compare(const Dataset& dataset, TrialModel& model) {
     Accumulator acc;
   };
   std::map<std::string, Group> groups;
+  // The dataset's 1-sigma noise of a channel; 0 when not given.
+  const auto noise_of = [&dataset](std::string_view channel) {
+    const auto noise = dataset.noise_si.find(channel);
+    return noise == dataset.noise_si.end() ? 0.0 : noise->second;
+  };
   const auto add = [&](std::string_view channel, const std::string& key, const std::string& trial,
                        const std::string& phase, double measured, double model_value, double spread,
-                       double time) {
+                       double noise, double time) {
     Group& g = groups[std::string(channel) + "\n" + key];
     g.group = key;
     g.trial = trial;
     g.phase = phase;
-    const auto noise = dataset.noise_si.find(channel);
-    g.acc.add(measured, model_value, spread, noise == dataset.noise_si.end() ? 0.0 : noise->second,
-              time);
+    g.acc.add(measured, model_value, spread, noise, time);
   };
   std::set<std::string> varying_conditions;
   for (const Trial& trial : dataset.trials) {
@@ -237,22 +240,23 @@ CompareReport compare(const Dataset& dataset, TrialModel& model) {
     }
     if (!usable) continue;
     for (const ChannelTrace& c : trace.channels) {
+      const double noise = noise_of(c.channel);
       for (std::size_t k = 0; k < c.measured_si.size(); ++k) {
         const double m = c.measured_si[k];
         const double p = c.model_si[k];
         const double s = c.model_spread_si.empty() ? 0.0 : c.model_spread_si[k];
         const double t = trace.time_s[k];
-        add(c.channel, "all", "", "", m, p, s, t);
-        add(c.channel, "trial " + trial.id, trial.id, "", m, p, s, t);
+        add(c.channel, "all", "", "", m, p, s, noise, t);
+        add(c.channel, "trial " + trial.id, trial.id, "", m, p, s, noise, t);
         if (trace.phase[k] != "all") {
-          add(c.channel, "phase " + trace.phase[k], "", trace.phase[k], m, p, s, t);
+          add(c.channel, "phase " + trace.phase[k], "", trace.phase[k], m, p, s, noise, t);
           add(c.channel, "trial " + trial.id + ", " + trace.phase[k], trial.id, trace.phase[k], m,
-              p, s, t);
+              p, s, noise, t);
         }
         for (const std::string& name : varying_conditions) {
           const auto found = trial.conditions.find(name);
           if (found == trial.conditions.end()) continue;
-          add(c.channel, name + "=" + condition_text(found->second), "", "", m, p, s, t);
+          add(c.channel, name + "=" + condition_text(found->second), "", "", m, p, s, noise, t);
         }
       }
     }
@@ -266,9 +270,7 @@ CompareReport compare(const Dataset& dataset, TrialModel& model) {
   }
   for (const auto& [key, g] : groups) {
     const std::string channel = key.substr(0, key.find('\n'));
-    const auto noise = dataset.noise_si.find(channel);
-    report.cells.push_back(make_cell(channel, g.group, g.trial, g.phase, g.acc,
-                                     noise == dataset.noise_si.end() ? 0.0 : noise->second));
+    report.cells.push_back(make_cell(channel, g.group, g.trial, g.phase, g.acc, noise_of(channel)));
   }
   std::stable_sort(report.cells.begin(), report.cells.end(),
                    [](const ErrorCell& a, const ErrorCell& b) { return a.score > b.score; });

@@ -265,8 +265,7 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   // the noise? A probe ensemble of the base model and of the best fit says.
   const bool probe_first_poses = dataset.experiment == ExperimentType::kLineTracks &&
                                  options.twin.line_tracks.ensemble_runs == 1 &&
-                                 diagnosis.noise_si > 0.0 && dataset.noise_si.contains("y") &&
-                                 dataset.noise_si.contains("angle");
+                                 line_tracks_channel_without_noise(dataset).empty();
   if (probe_first_poses) {
     TwinSettings probe = options.twin;
     probe.line_tracks.ensemble_runs = kFirstPoseProbeRuns;

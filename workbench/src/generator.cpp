@@ -416,13 +416,15 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
       const auto first_row = [&time](std::size_t row) { return time[row] == time.front(); };
       const std::array<std::pair<std::size_t, std::normal_distribution<double>*>, 3> noisy{
           {{2, &noise}, {3, &noise}, {4, &angle_noise}}};  // x, y, angle
+      // From the true pose, the truth starts clean and every row gets its noise below.
       const bool seen_after_start = options.truth_starts_at_true_pose;
-      for (const auto& [column, distribution] : noisy) {
-        if (seen_after_start) break;  // the truth starts clean; every row gets noise below
-        std::vector<double>& values = trial.data.channels[column].values_si;
-        for (std::size_t row = 0; row < values.size(); ++row) {
-          if (first_row(row) && distribution->stddev() > 0.0)
-            values[row] += (*distribution)(random);
+      if (!seen_after_start) {
+        for (const auto& [column, distribution] : noisy) {
+          std::vector<double>& values = trial.data.channels[column].values_si;
+          for (std::size_t row = 0; row < values.size(); ++row) {
+            if (first_row(row) && distribution->stddev() > 0.0)
+              values[row] += (*distribution)(random);
+          }
         }
       }
       const Table response = truth->run(data, trial);

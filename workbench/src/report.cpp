@@ -155,10 +155,7 @@ std::string report_html(const CompareReport& report) {
       if (!c.model_spread_si.empty()) {
         // An ensemble's sigma at each row, noise and spread together: where the residuals of a
         // right model would mostly lie.
-        double noise_si = 0.0;
-        for (const ErrorCell& cell : report.cells) {
-          if (cell.channel == c.channel && cell.group == "all") noise_si = cell.noise_si;
-        }
+        const double noise_si = report.overall(c.channel).noise_si;
         std::vector<double> low, high;
         for (std::size_t k = 0; k < residual.size(); ++k) {
           const double sigma = std::hypot(noise_si, c.model_spread_si[k]) * to_unit;

@@ -381,19 +381,15 @@ std::uint64_t trial_seed(std::uint64_t seed, const std::string& id) {
   return hash;
 }
 
-// The 1-sigma noise of a line-tracks channel, for the ensemble's jitter.
-double track_noise_si(const Dataset& dataset, std::string_view channel) {
-  const auto found = dataset.noise_si.find(channel);
-  if (found == dataset.noise_si.end() || !(found->second > 0.0)) {
-    throw std::runtime_error(
-        "the line-tracks ensemble jitters the first poses by the noise, and "
-        "the dataset gives none for '" +
-        std::string(channel) + "'");
-  }
-  return found->second;
-}
-
 }  // namespace
+
+std::string_view line_tracks_channel_without_noise(const Dataset& dataset) {
+  for (const std::string_view channel : {"x", "y", "angle"}) {
+    const auto found = dataset.noise_si.find(channel);
+    if (found == dataset.noise_si.end() || !(found->second > 0.0)) return channel;
+  }
+  return {};
+}
 
 Table TwinLineTracksModel::run(const Dataset& dataset, const Trial& trial) {
   require_experiment(dataset, ExperimentType::kLineTracks, "line-tracks");
@@ -439,8 +435,15 @@ Table TwinLineTracksModel::run(const Dataset& dataset, const Trial& trial) {
   const std::vector<model_tests::BeltPose> measured_first = params.first_poses;
   std::array<double, 3> jitter_sigma{0.0, 0.0, 0.0};
   if (runs > 1) {
-    jitter_sigma = {track_noise_si(dataset, "x"), track_noise_si(dataset, "y"),
-                    track_noise_si(dataset, "angle")};
+    const std::string_view unknown = line_tracks_channel_without_noise(dataset);
+    if (!unknown.empty()) {
+      throw std::runtime_error(
+          "the line-tracks ensemble jitters the first poses by the noise, and the dataset gives "
+          "none for '" +
+          std::string(unknown) + "'");
+    }
+    jitter_sigma = {dataset.noise_si.find("x")->second, dataset.noise_si.find("y")->second,
+                    dataset.noise_si.find("angle")->second};
   }
   std::mt19937_64 random(trial_seed(settings_.seed, trial.id));
   std::normal_distribution<double> standard_normal(0.0, 1.0);

@@ -163,6 +163,10 @@ class TwinLineTracksModel final : public TrialModel {
   LineTracksSettings settings_;
 };
 
+// The first of x, y and angle for which the dataset gives no noise (or none above 0): an
+// ensemble cannot jitter the first poses by it. Empty when all three have one.
+std::string_view line_tracks_channel_without_noise(const Dataset& dataset);
+
 // What make_twin_model's twins take besides the engine model: none but line tracks so far.
 struct TwinSettings {
   LineTracksSettings line_tracks;
