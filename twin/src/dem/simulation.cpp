@@ -54,27 +54,34 @@ void gather(std::vector<T>& values, std::vector<T>& scratch,
 
 // Joins per-thread lists (CSR segments of two parallel arrays, each thread's offsets local
 // to its own buffers) in thread order: the joined list is the same for any thread count.
+// Done in two parts so that the threads copy their own parts at once: the joined arrays are
+// sized first (by one thread), then each thread shifts its offsets and copies its part.
 template <typename A, typename B>
-void join_thread_segments(const std::vector<std::uint32_t>& thread_begin,
-                          const std::vector<std::vector<A>>& parts_a,
-                          const std::vector<std::vector<B>>& parts_b,
+void size_joined_segments(const std::vector<std::vector<A>>& parts_a,
                           std::vector<std::uint32_t>& offsets, std::vector<A>& joined_a,
                           std::vector<B>& joined_b) {
   std::size_t total = 0;
-  for (std::size_t t = 0; t < parts_a.size(); ++t) {
-    const auto shift = static_cast<std::uint32_t>(total);
-    for (std::uint32_t i = thread_begin[t]; i < thread_begin[t + 1]; ++i) offsets[i] += shift;
-    total += parts_a[t].size();
-  }
+  for (const auto& part : parts_a) total += part.size();
   joined_a.resize(total);
   joined_b.resize(total);
-  for (std::size_t t = 0, at = 0; t < parts_a.size(); ++t) {
-    const auto to = static_cast<std::ptrdiff_t>(at);
-    std::copy(parts_a[t].begin(), parts_a[t].end(), joined_a.begin() + to);
-    std::copy(parts_b[t].begin(), parts_b[t].end(), joined_b.begin() + to);
-    at += parts_a[t].size();
-  }
   offsets.back() = static_cast<std::uint32_t>(total);
+}
+
+// Returns where thread t's part starts in the joined arrays.
+template <typename A, typename B>
+std::size_t join_thread_segment(std::size_t t, const std::vector<std::uint32_t>& thread_begin,
+                                const std::vector<std::vector<A>>& parts_a,
+                                const std::vector<std::vector<B>>& parts_b,
+                                std::vector<std::uint32_t>& offsets, std::vector<A>& joined_a,
+                                std::vector<B>& joined_b) {
+  std::size_t at = 0;
+  for (std::size_t before = 0; before < t; ++before) at += parts_a[before].size();
+  const auto shift = static_cast<std::uint32_t>(at);
+  for (std::uint32_t i = thread_begin[t]; i < thread_begin[t + 1]; ++i) offsets[i] += shift;
+  const auto to = static_cast<std::ptrdiff_t>(at);
+  std::copy(parts_a[t].begin(), parts_a[t].end(), joined_a.begin() + to);
+  std::copy(parts_b[t].begin(), parts_b[t].end(), joined_b.begin() + to);
+  return at;
 }
 
 }  // namespace
@@ -104,8 +111,12 @@ struct Simulation::Impl {
   std::vector<std::uint32_t> cell_particles;
   std::vector<std::uint32_t> particle_cell;
   std::vector<std::uint32_t> pair_offsets;
+  std::vector<std::uint32_t> old_pair_offsets;  // the last list's, while the next is built
   std::vector<std::uint32_t> pair_j;
   std::vector<PairState> pair_states;
+  // per listed pair: whether its state holds history (PairState::active()). Most listed pairs
+  // are out of reach at any step; this keeps the force loop from reading their states.
+  std::vector<std::uint8_t> pair_history;
   std::vector<CarriedContact> carried;
   std::vector<Vec3> build_position_m;
   std::size_t rebuilds_since_sort = 0;
@@ -400,27 +411,7 @@ void Simulation::prepare() {
   const std::uint32_t listed = m.pair_offsets.empty() ? 0U : m.pair_offsets.back();
   m.pair_offsets.resize(n + 1, listed);  // new particles: empty lists until the rebuild
 
-  // Each bond's law from its types in ascending order: the model holds one law per ordered
-  // pair, the same parameters both ways, and a fillet's A-B and B-A bonds alternate. Looked up
-  // by the ordered pair, a body's bonds split into runs of one or two, and a vector kernel
-  // needs whole runs of one law.
-  m.bond_laws.resize(s.bonds.size());
-  for (std::size_t k = 0; k < s.bonds.size(); ++k) {
-    const std::uint32_t type_i = s.type[s.bonds[k].i];
-    const std::uint32_t type_j = s.type[s.bonds[k].j];
-    m.bond_laws[k] =
-        model_->interaction(std::min(type_i, type_j), std::max(type_i, type_j)).bond_law.get();
-  }
-  m.bond_begin.resize(threads + 1);
-  for (std::size_t t = 0; t <= threads; ++t) {
-    m.bond_begin[t] = static_cast<std::uint32_t>(s.bonds.size() * t / threads);
-  }
-  stats_.bond_law_runs = 0;
-  for (std::size_t t = 0; t < threads; ++t) {
-    for (std::uint32_t k = m.bond_begin[t]; k < m.bond_begin[t + 1]; ++k) {
-      if (k == m.bond_begin[t] || m.bond_laws[k] != m.bond_laws[k - 1]) ++stats_.bond_law_runs;
-    }
-  }
+  assign_bond_laws();
   m.particle_begin.assign(threads + 1, static_cast<std::uint32_t>(n));
   m.particle_begin[0] = 0;
 
@@ -432,6 +423,33 @@ void Simulation::prepare() {
   if (!m.forces_valid) {
     compute_forces();  // velocity Verlet needs F(t0); later additions start from zero force
     m.forces_valid = true;
+  }
+}
+
+// Each bond's law from its types in ascending order: the model holds one law per ordered pair,
+// the same parameters both ways, and a fillet's A-B and B-A bonds alternate. Looked up by the
+// ordered pair, a body's bonds split into runs of one or two, and a vector kernel needs whole
+// runs of one law. Also splits the bonds between the threads by count.
+void Simulation::assign_bond_laws() {
+  Impl& m = *impl_;
+  const State& s = state_;
+  m.bond_laws.resize(s.bonds.size());
+  for (std::size_t k = 0; k < s.bonds.size(); ++k) {
+    const std::uint32_t type_i = s.type[s.bonds[k].i];
+    const std::uint32_t type_j = s.type[s.bonds[k].j];
+    m.bond_laws[k] =
+        model_->interaction(std::min(type_i, type_j), std::max(type_i, type_j)).bond_law.get();
+  }
+  const auto threads = static_cast<std::size_t>(m.active_threads);
+  m.bond_begin.resize(threads + 1);
+  for (std::size_t t = 0; t <= threads; ++t) {
+    m.bond_begin[t] = static_cast<std::uint32_t>(s.bonds.size() * t / threads);
+  }
+  stats_.bond_law_runs = 0;
+  for (std::size_t t = 0; t < threads; ++t) {
+    for (std::uint32_t k = m.bond_begin[t]; k < m.bond_begin[t + 1]; ++k) {
+      if (k == m.bond_begin[t] || m.bond_laws[k] != m.bond_laws[k - 1]) ++stats_.bond_law_runs;
+    }
   }
 }
 
@@ -609,9 +627,15 @@ void Simulation::rebuild_neighbors() {
   };
   const std::size_t capacity_before = list_capacity();
 
-  // 1. history of active pairs, to carry into the new list
+  // 1. history of active pairs, to carry into the new list. Without a re-ordering of the
+  // particles each new segment is merged with the old one (both sorted by j), in parallel; the
+  // serial copy of every active pair was a third of a rebuild in the thesis' bulk run.
+  const int sort_every = model_->spec().sort_every_rebuilds;
+  const bool reordered = sort_every > 0 &&
+                         (m.rebuilds_since_sort++ % static_cast<std::size_t>(sort_every)) == 0 &&
+                         n > 0;
   m.carried.clear();
-  if (m.pair_offsets.size() == n + 1 && !m.pair_states.empty()) {
+  if (reordered && m.pair_offsets.size() == n + 1 && !m.pair_states.empty()) {
     for (std::uint32_t i = 0; i + 1 < m.pair_offsets.size(); ++i) {
       for (std::uint32_t k = m.pair_offsets[i]; k < m.pair_offsets[i + 1]; ++k) {
         if (m.pair_states[k].active()) m.carried.push_back({i, m.pair_j[k], m.pair_states[k]});
@@ -673,9 +697,7 @@ void Simulation::rebuild_neighbors() {
   m.cell_start[0] = 0;
 
   // 3. re-order particles by cell every few rebuilds (cache locality)
-  const int sort_every = model_->spec().sort_every_rebuilds;
-  if (sort_every > 0 && (m.rebuilds_since_sort++ % static_cast<std::size_t>(sort_every)) == 0 &&
-      n > 0) {
+  if (reordered) {
     sort_particles();
     for (std::size_t k = 0; k < n; ++k) m.cell_particles[k] = static_cast<std::uint32_t>(k);
   } else {
@@ -704,23 +726,25 @@ void Simulation::rebuild_neighbors() {
   }
 
   // 5. half neighbour list from the 27 surrounding cells
-  std::sort(m.carried.begin(), m.carried.end(),
-            [](const CarriedContact& a, const CarriedContact& b) {
-              return a.i != b.i ? a.i < b.i : a.j < b.j;
-            });
-  for (CarriedContact& c : m.carried) {  // re-ordering may have swapped a pair's order
-    if (c.i > c.j) {
-      std::swap(c.i, c.j);
-      c.state.tangential_displacement_m = -c.state.tangential_displacement_m;
+  // The carried history is in list order: by i, then j, with i < j. Only a re-ordering of the
+  // particles breaks that, so only then is it sorted again (each pair once: a unique order).
+  if (reordered) {
+    for (CarriedContact& c : m.carried) {  // re-ordering may have swapped a pair's order
+      if (c.i > c.j) {
+        std::swap(c.i, c.j);
+        c.state.tangential_displacement_m = -c.state.tangential_displacement_m;
+      }
     }
+    std::sort(m.carried.begin(), m.carried.end(),
+              [](const CarriedContact& a, const CarriedContact& b) {
+                return a.i != b.i ? a.i < b.i : a.j < b.j;
+              });
   }
-  std::sort(m.carried.begin(), m.carried.end(),
-            [](const CarriedContact& a, const CarriedContact& b) {
-              return a.i != b.i ? a.i < b.i : a.j < b.j;
-            });
   // Each thread lists the pairs of a contiguous range of i into its own buffers; the buffers
   // are then joined in thread order. A particle's segment does not depend on the split, so the
   // list is the same for any thread count.
+  m.old_pair_offsets.swap(m.pair_offsets);
+  const bool merge_old_list = !reordered && m.old_pair_offsets.size() == n + 1;
   m.pair_offsets.resize(n + 1);
   const int dx = m.cell_dims.x();
   const int dy = m.cell_dims.y();
@@ -803,11 +827,23 @@ void Simulation::rebuild_neighbors() {
         if (!interaction.contact_between_bonded && stamp[j] == i + 1) continue;
         pair_j.push_back(j);
       }
-      // sorted segment: deterministic order and merge with the carried history
+      // sorted segment: deterministic order and merge with the old segment or the carried
+      // history (the same states either way: an active pair's, else none)
       const auto segment_begin = pair_j.begin() + m.pair_offsets[i];
       std::sort(segment_begin, pair_j.end());
+      std::uint32_t old_k = merge_old_list ? m.old_pair_offsets[i] : 0U;
+      const std::uint32_t old_end = merge_old_list ? m.old_pair_offsets[i + 1] : 0U;
       for (auto it = segment_begin; it != pair_j.end(); ++it) {
         PairState state;
+        if (merge_old_list) {
+          while (old_k < old_end && m.pair_j[old_k] < *it) ++old_k;
+          if (old_k < old_end && m.pair_j[old_k] == *it) {
+            if (m.pair_states[old_k].active()) state = m.pair_states[old_k];
+            ++old_k;
+          }
+          pair_states.push_back(state);
+          continue;
+        }
         while (carried_next < m.carried.size() &&
                (m.carried[carried_next].i < i ||
                 (m.carried[carried_next].i == i && m.carried[carried_next].j < *it))) {
@@ -844,12 +880,26 @@ void Simulation::rebuild_neighbors() {
         }
       }
     }
+    // The old list is read until every thread has built its part.
+#pragma omp barrier
+#pragma omp single
+    {
+      size_joined_segments(m.build_pair_j, m.pair_offsets, m.pair_j, m.pair_states);
+      m.pair_history.resize(m.pair_j.size());
+      size_joined_segments(m.build_wall_mesh, m.wall_list_offsets, m.wall_list_mesh,
+                           m.wall_list_triangle);
+    }
+    const std::size_t pairs_at =
+        join_thread_segment(t, m.build_begin, m.build_pair_j, m.build_pair_states, m.pair_offsets,
+                            m.pair_j, m.pair_states);
+    for (std::size_t q = 0; q < pair_states.size(); ++q) {
+      m.pair_history[pairs_at + q] = pair_states[q].active() ? 1U : 0U;
+    }
+    join_thread_segment(t, m.build_begin, m.build_wall_mesh, m.build_wall_triangle,
+                        m.wall_list_offsets, m.wall_list_mesh, m.wall_list_triangle);
+    std::copy(s.position_m.begin() + i_begin, s.position_m.begin() + i_end,
+              m.build_position_m.begin() + i_begin);
   }
-  join_thread_segments(m.build_begin, m.build_pair_j, m.build_pair_states, m.pair_offsets, m.pair_j,
-                       m.pair_states);
-  std::copy(s.position_m.begin(), s.position_m.end(), m.build_position_m.begin());
-  join_thread_segments(m.build_begin, m.build_wall_mesh, m.build_wall_triangle, m.wall_list_offsets,
-                       m.wall_list_mesh, m.wall_list_triangle);
   m.mesh_moves_at_build = m.mesh_moves;
 
   // 6. thread ranges balanced by pair count (plus a share per particle for walls)
@@ -924,15 +974,14 @@ void Simulation::compute_forces() {
         const double radius_sum = ri + rj;
         const double reach = radius_sum + m.pair_range_m[pair_type];
         const double distance_squared = d.squaredNorm();
-        PairState& pair_state = m.pair_states[k];
         if (distance_squared >= reach * reach) {
-          if (pair_state.flags != 0 || pair_state.tangential_displacement_m.x() != 0.0 ||
-              pair_state.tangential_displacement_m.y() != 0.0 ||
-              pair_state.tangential_displacement_m.z() != 0.0) {
-            pair_state.reset();
+          if (m.pair_history[k] != 0) {
+            m.pair_states[k].reset();
+            m.pair_history[k] = 0;
           }
           continue;
         }
+        PairState& pair_state = m.pair_states[k];
         const double distance = std::sqrt(distance_squared);
         PairGeometry g;
         g.normal = d / distance;
@@ -944,6 +993,7 @@ void Simulation::compute_forces() {
         g.timestep_s = dt;
         ForceAccumulator acc;
         m.interactions[pair_type]->contact_chain->compute(g, pair_state, acc);
+        m.pair_history[k] = pair_state.active() ? 1U : 0U;
         if (!acc.touching) continue;
         const Vec3 tangential = acc.tangential_elastic_force_n + acc.tangential_damping_force_n;
         const Vec3 f = (acc.normal_force_n + acc.normal_damping_force_n) * g.normal + tangential;
