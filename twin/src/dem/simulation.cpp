@@ -127,6 +127,12 @@ struct Simulation::Impl {
   std::vector<std::uint32_t> partner_particle;
   bool partners_valid = false;  // until a bond breaks, particles are re-ordered or added
   std::vector<std::uint8_t> bond_break_handled;  // per bond: its freed pair has been checked
+  std::vector<std::uint32_t> bond_order;         // sort_bonds' scratch
+  std::vector<std::uint32_t> bond_order_next;
+  std::vector<std::uint32_t> bond_bucket;
+  std::vector<Bond> scratch_bonds;
+  std::vector<BondState> scratch_bond_states;
+  std::vector<std::uint8_t> scratch_u8;
   // neighbour-list build, per thread
   std::vector<std::uint32_t> build_begin;
   std::vector<std::vector<std::uint32_t>> build_pair_j;
@@ -453,6 +459,46 @@ void Simulation::assign_bond_laws() {
   }
 }
 
+// Re-orders the bonds after the particles: by law (the kernels need whole runs of one law),
+// then by the lower particle index, ties in the old order (two stable counting passes, so the
+// order is a function of the state alone). In creation order a body's bonds read and write
+// particles all over the cell-sorted arrays; in the thesis' bulk run the bond kernel spent most
+// of its time waiting on those loads (docs/benchmarks.md). Each bond keeps its i and j, so its
+// history keeps its sign.
+void Simulation::sort_bonds() {
+  Impl& m = *impl_;
+  State& s = state_;
+  const std::size_t count = s.bonds.size();
+  if (count < 2) return;
+  const std::size_t n = s.size();
+  const auto law_key = [&](const Bond& bond) {
+    const std::uint32_t type_i = s.type[bond.i];
+    const std::uint32_t type_j = s.type[bond.j];
+    return std::min(type_i, type_j) * m.type_count + std::max(type_i, type_j);
+  };
+  const auto counting_pass = [&m](const std::vector<std::uint32_t>& from,
+                                  std::vector<std::uint32_t>& to, std::size_t buckets,
+                                  const auto& key) {
+    m.bond_bucket.assign(buckets + 1, 0U);
+    for (const std::uint32_t k : from) ++m.bond_bucket[key(k) + 1];
+    for (std::size_t b = 0; b < buckets; ++b) m.bond_bucket[b + 1] += m.bond_bucket[b];
+    to.resize(from.size());
+    for (const std::uint32_t k : from) to[m.bond_bucket[key(k)]++] = k;
+  };
+  m.bond_order.resize(count);
+  for (std::size_t k = 0; k < count; ++k) m.bond_order[k] = static_cast<std::uint32_t>(k);
+  counting_pass(m.bond_order, m.bond_order_next, n, [&s](std::uint32_t k) {
+    return static_cast<std::size_t>(std::min(s.bonds[k].i, s.bonds[k].j));
+  });
+  counting_pass(m.bond_order_next, m.bond_order, m.type_count * m.type_count,
+                [&](std::uint32_t k) { return static_cast<std::size_t>(law_key(s.bonds[k])); });
+  m.bond_break_handled.resize(count, 0);
+  gather(s.bonds, m.scratch_bonds, m.bond_order);
+  gather(s.bond_states, m.scratch_bond_states, m.bond_order);
+  gather(m.bond_break_handled, m.scratch_u8, m.bond_order);
+  assign_bond_laws();
+}
+
 void Simulation::update_wall_geometry() {
   const ModelSpec& spec = model_->spec();
   const State& state = state_;
@@ -546,6 +592,7 @@ void Simulation::sort_particles() {
     c.i = m.new_of_old[c.i];
     c.j = m.new_of_old[c.j];
   }
+  sort_bonds();
   m.partners_valid = false;
   ++stats_.particle_sorts;
 }

@@ -133,6 +133,7 @@ class Simulation {
   void update_wall_geometry();
   void rebuild_neighbors();
   void sort_particles();
+  void sort_bonds();
   void assign_bond_laws();
   void gather_particles(const std::vector<std::uint32_t>& order);
   void compute_forces();
