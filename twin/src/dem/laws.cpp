@@ -190,8 +190,9 @@ class Jkr final : public ContactLaw {
     state.scalars[0] = x;
     const double a = x * x;
     const double force = jkr_force_n(work_of_adhesion_, radius, youngs_pa_, a);
+    // d^1.5 as d sqrt(d): std::pow was about 2.5 % of the thesis' bulk run
     const double hertz = g.overlap_m > 0.0 ? (4.0 / 3.0) * youngs_pa_ * std::sqrt(radius) *
-                                                 std::pow(g.overlap_m, 1.5)
+                                                 (g.overlap_m * std::sqrt(g.overlap_m))
                                            : 0.0;
     f.normal_force_n += force - hertz;  // replace the Hertz part of an earlier hertz_mindlin
     f.friction_normal_load_n =
