@@ -163,16 +163,8 @@ TEST(DemBondKernel, BondedDropIsTheSameRunWithEitherKernel) {
     spec.min_particles_per_thread = 1;
     spec.bond_kernel = kernel;
     Simulation sim(std::make_shared<Model>(spec));
-    std::vector<Vec3> positions;
-    const double pitch = 2.0 * kRadius;
-    for (int x = 0; x < 5; ++x)
-      for (int y = 0; y < 4; ++y)
-        for (int z = 0; z < 3; ++z) positions.emplace_back(x * pitch, y * pitch, z * pitch);
-    std::vector<BodyBond> bonds;
-    for (std::uint32_t a = 0; a < positions.size(); ++a)
-      for (std::uint32_t b = a + 1; b < positions.size(); ++b)
-        if ((positions[a] - positions[b]).norm() < pitch * std::sqrt(3.0) * 1.001)
-          bonds.push_back({a, b, kAppendixBContactRadiusM});
+    const std::vector<Vec3> positions = test::block_5x4x3_positions();
+    const std::vector<BodyBond> bonds = test::block_bonds(positions, std::sqrt(3.0));
     const std::vector<double> radii(positions.size(), kRadius);
     const std::vector<std::uint8_t> types(positions.size(), 0);
     for (int body = 0; body < 2; ++body) {

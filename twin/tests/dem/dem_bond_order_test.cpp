@@ -40,16 +40,8 @@ ModelSpec two_law_model(int threads, int sort_every_rebuilds) {
 // apart spinning so that the particles move across cells and are re-ordered. They start 15 and 20
 // cm up: in the 100 ms the tests run they neither meet each other nor the floor.
 void add_blocks(Simulation& sim) {
-  std::vector<Vec3> positions;
-  const double pitch = 2.0 * kRadius;
-  for (int x = 0; x < 5; ++x)
-    for (int y = 0; y < 4; ++y)
-      for (int z = 0; z < 3; ++z) positions.emplace_back(x * pitch, y * pitch, z * pitch);
-  std::vector<BodyBond> bonds;
-  for (std::uint32_t a = 0; a < positions.size(); ++a)
-    for (std::uint32_t b = a + 1; b < positions.size(); ++b)
-      if ((positions[a] - positions[b]).norm() < pitch * std::sqrt(2.0) * 1.001)
-        bonds.push_back({a, b, kAppendixBContactRadiusM});
+  const std::vector<Vec3> positions = test::block_5x4x3_positions();
+  std::vector<BodyBond> bonds = test::block_bonds(positions, std::sqrt(2.0));
   std::mt19937 random(7);
   const std::vector<double> radii(positions.size(), kRadius);
   for (const std::uint8_t type : {std::uint8_t{0}, std::uint8_t{2}}) {

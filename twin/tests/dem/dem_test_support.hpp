@@ -1,8 +1,12 @@
 // Small models for the DEM engine tests.
 #pragma once
 
+#include <cmath>
+#include <cstdint>
 #include <memory>
+#include <vector>
 
+#include "fl/twin/dem/config.hpp"
 #include "fl/twin/dem/simulation.hpp"
 
 namespace fl::dem::test {
@@ -46,6 +50,30 @@ inline LawSpec bpm(double normal_n_per_m3, double shear_n_per_m3, double normal_
            {"shear_stiffness_n_per_m3", shear_n_per_m3},
            {"normal_strength_pa", normal_strength_pa},
            {"shear_strength_pa", shear_strength_pa}}};
+}
+
+// Sphere centres of a 5 x 4 x 3 block touching its face neighbours (pitch: one diameter).
+inline std::vector<Vec3> block_5x4x3_positions() {
+  std::vector<Vec3> positions;
+  const double pitch = 2.0 * kRadius;
+  for (int x = 0; x < 5; ++x)
+    for (int y = 0; y < 4; ++y)
+      for (int z = 0; z < 3; ++z) positions.emplace_back(x * pitch, y * pitch, z * pitch);
+  return positions;
+}
+
+// Appendix B bonds between every two centres closer than `reach_in_pitches` pitches (a 0.1 %
+// margin over the lattice distance asked for): sqrt(2) bonds face and edge neighbours, sqrt(3)
+// also the body diagonals, which sit at the break distance of two contact radii.
+inline std::vector<BodyBond> block_bonds(const std::vector<Vec3>& positions,
+                                         double reach_in_pitches) {
+  std::vector<BodyBond> bonds;
+  const double reach_m = 2.0 * kRadius * reach_in_pitches * 1.001;
+  for (std::uint32_t a = 0; a < positions.size(); ++a)
+    for (std::uint32_t b = a + 1; b < positions.size(); ++b)
+      if ((positions[a] - positions[b]).norm() < reach_m)
+        bonds.push_back({a, b, kAppendixBContactRadiusM});
+  return bonds;
 }
 
 }  // namespace fl::dem::test
