@@ -9,6 +9,7 @@
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "fl/twin/dem/geometry.hpp"
 
@@ -82,6 +83,13 @@ std::size_t join_thread_segment(std::size_t t, const std::vector<std::uint32_t>&
   std::copy(parts_a[t].begin(), parts_a[t].end(), joined_a.begin() + to);
   std::copy(parts_b[t].begin(), parts_b[t].end(), joined_b.begin() + to);
   return at;
+}
+
+// A bond's two types in ascending order: the model holds one bond law per ordered type pair.
+std::pair<std::uint32_t, std::uint32_t> ordered_types(const State& s, const Bond& bond) {
+  const std::uint32_t type_i = s.type[bond.i];
+  const std::uint32_t type_j = s.type[bond.j];
+  return {std::min(type_i, type_j), std::max(type_i, type_j)};
 }
 
 }  // namespace
@@ -441,10 +449,8 @@ void Simulation::assign_bond_laws() {
   const State& s = state_;
   m.bond_laws.resize(s.bonds.size());
   for (std::size_t k = 0; k < s.bonds.size(); ++k) {
-    const std::uint32_t type_i = s.type[s.bonds[k].i];
-    const std::uint32_t type_j = s.type[s.bonds[k].j];
-    m.bond_laws[k] =
-        model_->interaction(std::min(type_i, type_j), std::max(type_i, type_j)).bond_law.get();
+    const auto [low, high] = ordered_types(s, s.bonds[k]);
+    m.bond_laws[k] = model_->interaction(low, high).bond_law.get();
   }
   const auto threads = static_cast<std::size_t>(m.active_threads);
   m.bond_begin.resize(threads + 1);
@@ -472,9 +478,8 @@ void Simulation::sort_bonds() {
   if (count < 2) return;
   const std::size_t n = s.size();
   const auto law_key = [&](const Bond& bond) {
-    const std::uint32_t type_i = s.type[bond.i];
-    const std::uint32_t type_j = s.type[bond.j];
-    return std::min(type_i, type_j) * m.type_count + std::max(type_i, type_j);
+    const auto [low, high] = ordered_types(s, bond);
+    return low * m.type_count + high;
   };
   const auto counting_pass = [&m](const std::vector<std::uint32_t>& from,
                                   std::vector<std::uint32_t>& to, std::size_t buckets,
