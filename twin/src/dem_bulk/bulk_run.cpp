@@ -229,6 +229,7 @@ BulkRunSummary run_bulk_experiment(BulkScene& scene, const BulkRunOptions& optio
     s.broken_bonds = bonds.broken;
     s.broken_bonds_total = bonds.broken + scene.counters().broken_bonds_removed;
     s.touching_pairs = sim.stats().touching_pairs;
+    s.listed_pairs = sim.stats().neighbor_pairs;
     s.engine_steps = sim.state().step - first_step;
     s.neighbor_rebuilds = sim.stats().neighbor_rebuilds - first_rebuilds;
     torque_sum_nm = 0.0;
@@ -308,6 +309,7 @@ void write_bulk_run_csv(std::span<const BulkRunSample> samples, const std::files
                           "broken_bonds",
                           "broken_bonds_total",
                           "touching_pairs",
+                          "listed_pairs",
                           "engine_steps",
                           "neighbor_rebuilds"});
   const auto d = [](auto v) { return static_cast<double>(v); };
@@ -335,6 +337,7 @@ void write_bulk_run_csv(std::span<const BulkRunSample> samples, const std::files
                    d(s.broken_bonds),
                    d(s.broken_bonds_total),
                    d(s.touching_pairs),
+                   d(s.listed_pairs),
                    d(s.engine_steps),
                    d(s.neighbor_rebuilds)});
   }

@@ -77,6 +77,7 @@ struct BulkRunSample {
   std::size_t broken_bonds = 0;          // of those
   std::uint64_t broken_bonds_total = 0;  // and those that left with removed fillets
   std::size_t touching_pairs = 0;        // sphere-sphere, last force evaluation
+  std::size_t listed_pairs = 0;          // sphere-sphere in the neighbour list (skin included)
   std::uint64_t engine_steps = 0;        // since the start
   std::uint64_t neighbor_rebuilds = 0;
 };
