@@ -4,8 +4,15 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
 
 #include "dem_scenarios.hpp"
+#include "fl/twin/dem/config.hpp"
+#include "fl/twin/dem/model.hpp"
 
 namespace {
 
@@ -58,6 +65,55 @@ BENCHMARK(BM_BondedFillets)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MinTime(3.0);
+
+// The fillet-fillet contact chain of appendix B (hertz_mindlin, jkr, coulomb) on its own, per
+// touching pair: the laws' share of the thesis' bulk pile (docs/benchmarks.md) measured on fixed
+// pairs, free of the pile's run-to-run spread. 4096 pairs with overlaps from the adhesive neck
+// (-5 um) to 60 um (1.5 % of the radius, the pile's deep contacts), sliding at up to 5 mm/s; each
+// iteration computes every pair twice, at two overlaps 10 nm apart, so the contact-radius solve
+// starts warm as from the last step.
+void BM_FilletContactChain(benchmark::State& state) {
+  const fl::dem::Model model(fl::dem::appendix_b_model_spec());
+  const fl::dem::ContactChain& chain = *model.interaction(0, 0).contact_chain;
+  constexpr std::size_t kPairs = 4096;
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> overlap_m(-5e-6, 60e-6);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::array<std::vector<fl::dem::PairGeometry>, 2> geometry;
+  for (auto& g : geometry) g.resize(kPairs);
+  for (std::size_t k = 0; k < kPairs; ++k) {
+    fl::dem::PairGeometry g;
+    g.normal = Vec3(unit(random), unit(random), unit(random)).normalized();
+    g.overlap_m = overlap_m(random);
+    g.relative_velocity_m_per_s = 0.005 * Vec3(unit(random), unit(random), unit(random));
+    g.effective_radius_m = 0.002;  // two 4 mm spheres
+    g.effective_mass_kg = 0.5 * 940.0 * 4.0 / 3.0 * std::numbers::pi * 0.004 * 0.004 * 0.004;
+    g.timestep_s = 1.678512e-4;
+    geometry[0][k] = g;
+    g.overlap_m += 1e-8;
+    geometry[1][k] = g;
+  }
+  std::vector<fl::dem::PairState> states(kPairs);
+  for (auto& s : states) s.flags = fl::dem::PairState::kFlagAdhesiveNeck;  // all in contact
+  double sink = 0.0;
+  for (auto _ : state) {
+    for (const auto& pass : geometry) {
+      for (std::size_t k = 0; k < kPairs; ++k) {
+        fl::dem::ForceAccumulator f;
+        chain.compute(pass[k], states[k], f);
+        sink += f.normal_force_n;
+      }
+    }
+  }
+  benchmark::DoNotOptimize(sink);
+  state.counters["pair_evaluations_per_s"] = benchmark::Counter(
+      static_cast<double>(2 * kPairs * state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["seconds_per_pair"] =
+      benchmark::Counter(static_cast<double>(2 * kPairs * state.iterations()),
+                         benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+  state.counters["fused"] = chain.fused() ? 1.0 : 0.0;
+}
+BENCHMARK(BM_FilletContactChain)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 
 }  // namespace
 

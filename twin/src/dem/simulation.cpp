@@ -1036,7 +1036,7 @@ void Simulation::compute_forces() {
         PairState& pair_state = m.pair_states[k];
         const double distance = std::sqrt(distance_squared);
         PairGeometry g;
-        g.normal = d / distance;
+        g.normal = d * (1.0 / distance);  // one division, not three
         g.overlap_m = radius_sum - distance;
         g.relative_velocity_m_per_s = vi - v[j] - (ri * wi + rj * w[j]).cross(g.normal);
         g.relative_angular_velocity_rad_per_s = wi - w[j];
