@@ -855,20 +855,29 @@ void Simulation::rebuild_neighbors() {
       for (int z = std::max(cz - 1, 0); z <= std::min(cz + 1, dz - 1); ++z) {
         for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, dy - 1); ++y) {
           const int row = (z * dy + y) * dx;
-          const auto begin = m.cell_start[static_cast<std::size_t>(row + std::max(cx - 1, 0))];
-          const auto end =
-              m.cell_start[static_cast<std::size_t>(row + std::min(cx + 1, dx - 1)) + 1];
-          // Most candidates fail the index or the distance test, and half of them at random,
-          // so both are folded into the count of a write that always happens: mispredicted
-          // branches were most of the list build's time on a line. The few kept ones are
-          // then checked for contact laws and bonds.
-          for (std::uint32_t c = begin; c < end; ++c) {
-            const std::uint32_t j = m.cell_particles[c];
-            const std::size_t pair_type = type_row + s.type[j];
-            const double reach = m.listing_reach_m(ri, s.radius_m[j], pair_type);
-            const bool keep = (j > i) & ((xi - s.position_m[j]).squaredNorm() < reach * reach);
-            in_reach[in_reach_count] = j;
-            in_reach_count += keep ? 1U : 0U;
+          for (int x = std::max(cx - 1, 0); x <= std::min(cx + 1, dx - 1); ++x) {
+            const auto searched_cell = static_cast<std::size_t>(row + x);
+            const auto cell_begin = m.cell_particles.begin() + m.cell_start[searched_cell];
+            const auto cell_end = m.cell_particles.begin() + m.cell_start[searched_cell + 1];
+            // A cell lists its particles in ascending order (the binning is a stable counting
+            // sort), so those up to i, never kept (pairs are listed under the lower index),
+            // are a prefix: skipped. Right after a re-ordering by cell that is every particle
+            // of the 13 cells before i's, half the candidates. The kept pairs are the same.
+            if (cell_begin == cell_end || *(cell_end - 1) <= i) continue;
+            const auto first =
+                *cell_begin > i ? cell_begin : std::upper_bound(cell_begin, cell_end, i);
+            // Most candidates fail the distance test, and half of them at random, so it is
+            // folded into the count of a write that always happens: mispredicted branches were
+            // most of the list build's time on a line. The few kept ones are then checked for
+            // contact laws and bonds.
+            for (auto c = first; c < cell_end; ++c) {
+              const std::uint32_t j = *c;
+              const std::size_t pair_type = type_row + s.type[j];
+              const double reach = m.listing_reach_m(ri, s.radius_m[j], pair_type);
+              const bool keep = (xi - s.position_m[j]).squaredNorm() < reach * reach;
+              in_reach[in_reach_count] = j;
+              in_reach_count += keep ? 1U : 0U;
+            }
           }
         }
       }
