@@ -178,6 +178,9 @@ struct Simulation::Impl {
 
   // threads
   std::vector<std::uint32_t> particle_begin;  // threads + 1 boundaries
+  // per particle: its listed pairs that held contact history at the last build, the pairs the
+  // laws will run on; they weigh the threads' particle ranges
+  std::vector<std::uint32_t> contacts_at_build;
   std::vector<std::uint32_t> bond_begin;
   std::vector<std::vector<Vec3>> force_buffers;  // threads 1.. (thread 0 writes the state)
   std::vector<std::vector<Vec3>> torque_buffers;
@@ -812,6 +815,7 @@ void Simulation::rebuild_neighbors() {
   const std::size_t planes = spec.planes.size();
   const std::size_t wall_count = planes + spec.meshes.size();
   m.wall_list_offsets.resize(n + 1);
+  m.contacts_at_build.resize(n);
   m.build_begin.assign(build_threads + 1, 0);
   for (std::size_t t = 0; t <= build_threads; ++t) {
     m.build_begin[t] = static_cast<std::uint32_t>(n * t / build_threads);
@@ -894,6 +898,7 @@ void Simulation::rebuild_neighbors() {
       std::sort(segment_begin, pair_j.end());
       std::uint32_t old_k = merge_old_list ? m.old_pair_offsets[i] : 0U;
       const std::uint32_t old_end = merge_old_list ? m.old_pair_offsets[i + 1] : 0U;
+      std::uint32_t contacts = 0;
       for (auto it = segment_begin; it != pair_j.end(); ++it) {
         PairState state;
         if (merge_old_list) {
@@ -902,6 +907,7 @@ void Simulation::rebuild_neighbors() {
             if (m.pair_states[old_k].active()) state = m.pair_states[old_k];
             ++old_k;
           }
+          contacts += state.active() ? 1U : 0U;
           pair_states.push_back(state);
           continue;
         }
@@ -914,8 +920,10 @@ void Simulation::rebuild_neighbors() {
             m.carried[carried_next].j == *it) {
           state = m.carried[carried_next++].state;
         }
+        contacts += state.active() ? 1U : 0U;
         pair_states.push_back(state);
       }
+      m.contacts_at_build[i] = contacts;
 
       // 7. wall list: the triangles within reach plus skin, by mesh then triangle
       m.wall_list_offsets[i] = static_cast<std::uint32_t>(wall_mesh.size());  // local, as above
@@ -963,15 +971,31 @@ void Simulation::rebuild_neighbors() {
   }
   m.mesh_moves_at_build = m.mesh_moves;
 
-  // 6. thread ranges balanced by pair count (plus a share per particle for walls)
+  // 6. thread ranges balanced by the contact loop's work. A listed pair is a distance test; one
+  // that held contact at the build also runs its laws, about four tests' time; a listed
+  // triangle is a closest-point search with its laws, about sixteen; each particle tests the
+  // planes. Weighed by listed pairs alone, the thread holding the bottom of a pile (the floor,
+  // the box's and the belt's triangles) was busy 1.8 times as long as the other; these weights
+  // were fitted on that run until both waited about as long (docs/benchmarks.md).
   const std::size_t threads = static_cast<std::size_t>(m.active_threads);
-  const double total = static_cast<double>(m.pair_j.size()) + 2.0 * static_cast<double>(n);
+  const auto work = [&m](std::uint32_t i) {
+    constexpr double kContactWeight = 4.0;
+    constexpr double kListedTriangleWeight = 16.0;
+    constexpr double kPlanesWeight = 2.0;
+    return static_cast<double>(m.pair_offsets[i + 1] - m.pair_offsets[i]) +
+           kContactWeight * static_cast<double>(m.contacts_at_build[i]) +
+           kListedTriangleWeight *
+               static_cast<double>(m.wall_list_offsets[i + 1] - m.wall_list_offsets[i]) +
+           kPlanesWeight;
+  };
+  double total = 0.0;
+  for (std::uint32_t i = 0; i < n; ++i) total += work(i);
   std::uint32_t i = 0;
+  double done = 0.0;
   m.particle_begin[0] = 0;
   for (std::size_t t = 1; t < threads; ++t) {
     const double target = total * static_cast<double>(t) / static_cast<double>(threads);
-    while (i < n && static_cast<double>(m.pair_offsets[i]) + 2.0 * static_cast<double>(i) < target)
-      ++i;
+    while (i < n && done < target) done += work(i++);
     m.particle_begin[t] = i;
   }
   m.particle_begin[threads] = static_cast<std::uint32_t>(n);
@@ -1256,7 +1280,6 @@ void Simulation::compute_forces() {
       }
     }
     m.tallies[t] = tally;
-
 #pragma omp barrier
     if (m.active_threads > 1) {
       for (std::uint32_t k = i_begin; k < i_end; ++k) {
