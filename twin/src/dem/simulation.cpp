@@ -178,6 +178,11 @@ struct Simulation::Impl {
 
   // threads
   std::vector<std::uint32_t> particle_begin;  // threads + 1 boundaries
+  // Per thread: the lowest particle index its bonds touch (none: max). A thread's pairs are
+  // listed under its own particles with j > i, so it writes no force below
+  // min(particle_begin[t], bond_low[t]): its buffer is cleared and summed from there only.
+  std::vector<std::uint32_t> bond_low;
+  std::vector<std::uint32_t> written_from;  // this force pass's, per thread (see bond_low)
   // per particle: its listed pairs that held contact history at the last build, the pairs the
   // laws will run on; they weigh the threads' particle ranges
   std::vector<std::uint32_t> contacts_at_build;
@@ -259,6 +264,7 @@ Simulation::Simulation(std::shared_ptr<const Model> model)
   m.tallies.resize(static_cast<std::size_t>(m.threads));
   m.force_buffers.resize(static_cast<std::size_t>(m.threads));
   m.torque_buffers.resize(static_cast<std::size_t>(m.threads));
+  m.written_from.assign(static_cast<std::size_t>(m.threads), 0);
   m.wall_force_buffers.assign(static_cast<std::size_t>(m.threads),
                               std::vector<Vec3>(wall_count, Vec3::Zero()));
   m.wall_torque_buffers.assign(static_cast<std::size_t>(m.threads),
@@ -459,6 +465,12 @@ void Simulation::assign_bond_laws() {
   m.bond_begin.resize(threads + 1);
   for (std::size_t t = 0; t <= threads; ++t) {
     m.bond_begin[t] = static_cast<std::uint32_t>(s.bonds.size() * t / threads);
+  }
+  m.bond_low.assign(threads, std::numeric_limits<std::uint32_t>::max());
+  for (std::size_t t = 0; t < threads; ++t) {
+    for (std::uint32_t k = m.bond_begin[t]; k < m.bond_begin[t + 1]; ++k) {
+      m.bond_low[t] = std::min({m.bond_low[t], s.bonds[k].i, s.bonds[k].j});
+    }
   }
   stats_.bond_law_runs = 0;
   for (std::size_t t = 0; t < threads; ++t) {
@@ -1025,8 +1037,25 @@ void Simulation::compute_forces() {
     const auto t = static_cast<std::size_t>(omp_get_thread_num());
     Vec3* force = t == 0 ? s.force_n.data() : m.force_buffers[t].data();
     Vec3* torque = t == 0 ? s.torque_nm.data() : m.torque_buffers[t].data();
-    std::fill(force, force + n, Vec3::Zero());
-    std::fill(torque, torque + n, Vec3::Zero());
+    // Thread 0 writes the state's arrays; each thread clears its equal share of them, the share
+    // it sums and kicks after the force pass (so those lines stay in its core's cache), then
+    // a barrier. Another thread's buffer is cleared from its lowest written index (bond_low)
+    // only: below it the buffer is neither written nor read.
+    const auto threads = static_cast<std::size_t>(m.active_threads);
+    const std::size_t share_begin = n * t / threads;
+    const std::size_t share_end = n * (t + 1) / threads;
+    std::fill(s.force_n.begin() + static_cast<std::ptrdiff_t>(share_begin),
+              s.force_n.begin() + static_cast<std::ptrdiff_t>(share_end), Vec3::Zero());
+    std::fill(s.torque_nm.begin() + static_cast<std::ptrdiff_t>(share_begin),
+              s.torque_nm.begin() + static_cast<std::ptrdiff_t>(share_end), Vec3::Zero());
+    if (t > 0) {
+      const std::size_t written_from =
+          std::min<std::size_t>({m.particle_begin[t], m.bond_low[t], n});
+      std::fill(force + written_from, force + n, Vec3::Zero());
+      std::fill(torque + written_from, torque + n, Vec3::Zero());
+      m.written_from[t] = static_cast<std::uint32_t>(written_from);
+    }
+#pragma omp barrier
     Vec3* wall_force = m.wall_force_buffers[t].data();
     Vec3* wall_torque = m.wall_torque_buffers[t].data();
     std::fill(wall_force, wall_force + wall_count, Vec3::Zero());
@@ -1282,8 +1311,13 @@ void Simulation::compute_forces() {
     m.tallies[t] = tally;
 #pragma omp barrier
     if (m.active_threads > 1) {
-      for (std::uint32_t k = i_begin; k < i_end; ++k) {
-        for (std::size_t b = 1; b < static_cast<std::size_t>(m.active_threads); ++b) {
+      // Each thread sums its equal share, the one it cleared and kicks next: the sum is per
+      // particle, the same bits for any split. Below a buffer's written_from it holds no
+      // force: +0, which would change nothing (the sums start at +0 and never reach -0).
+      const auto sum_begin = static_cast<std::uint32_t>(share_begin);
+      const auto sum_end = static_cast<std::uint32_t>(share_end);
+      for (std::size_t b = 1; b < threads; ++b) {
+        for (std::uint32_t k = std::max(sum_begin, m.written_from[b]); k < sum_end; ++k) {
           s.force_n[k] += m.force_buffers[b][k];
           s.torque_nm[k] += m.torque_buffers[b][k];
         }
@@ -1374,9 +1408,15 @@ void Simulation::step(std::size_t count) {
     const bool finish_previous = second_half_pending;
 #pragma omp parallel num_threads(m.active_threads) if (m.active_threads > 1) reduction(|| : rebuild)
     {
+      // Equal shares of particles: a kick costs the same for each, unlike the contact loop's
+      // work, whose ranges (particle_begin) give the thread holding the bottom of a pile fewer
+      // particles; on those ranges one thread waited for the other here. The share is the one
+      // the thread cleared and summed in compute_forces. Each particle's update is its own,
+      // so the split changes no bits.
       const auto t = static_cast<std::size_t>(omp_get_thread_num());
-      const std::uint32_t begin = m.particle_begin[t];
-      const std::uint32_t end = m.particle_begin[t + 1];
+      const auto threads = static_cast<std::size_t>(m.active_threads);
+      const auto begin = static_cast<std::uint32_t>(n * t / threads);
+      const auto end = static_cast<std::uint32_t>(n * (t + 1) / threads);
       for (std::uint32_t k = begin; k < end; ++k) {
         if (finish_previous) half_kick(k);
         half_kick(k);
