@@ -835,11 +835,19 @@ void Simulation::rebuild_neighbors() {
 #pragma omp parallel num_threads(m.active_threads) if (m.active_threads > 1)
   {
     const auto t = static_cast<std::size_t>(omp_get_thread_num());
-    std::vector<std::uint32_t>& pair_j = m.build_pair_j[t];
-    std::vector<PairState>& pair_states = m.build_pair_states[t];
+    // The thread's growing buffers are swapped into vectors of its own for the build and back
+    // after it (no allocation). In the shared arrays the threads' vector headers sit side by
+    // side on one cache line, and every push_back writes its header: the two threads' pushes
+    // passed that line between the cores at each listed pair.
+    std::vector<std::uint32_t> pair_j;
+    std::vector<PairState> pair_states;
+    std::vector<std::uint32_t> wall_mesh;
+    std::vector<std::uint32_t> wall_triangle;
+    pair_j.swap(m.build_pair_j[t]);
+    pair_states.swap(m.build_pair_states[t]);
+    wall_mesh.swap(m.build_wall_mesh[t]);
+    wall_triangle.swap(m.build_wall_triangle[t]);
     std::vector<std::uint32_t>& stamp = m.build_stamps[t];  // i + 1 at i's bonded partners
-    std::vector<std::uint32_t>& wall_mesh = m.build_wall_mesh[t];
-    std::vector<std::uint32_t>& wall_triangle = m.build_wall_triangle[t];
     pair_j.clear();
     pair_states.clear();
     wall_mesh.clear();
@@ -961,6 +969,10 @@ void Simulation::rebuild_neighbors() {
         }
       }
     }
+    pair_j.swap(m.build_pair_j[t]);
+    pair_states.swap(m.build_pair_states[t]);
+    wall_mesh.swap(m.build_wall_mesh[t]);
+    wall_triangle.swap(m.build_wall_triangle[t]);
     // The old list is read until every thread has built its part.
 #pragma omp barrier
 #pragma omp single
@@ -973,8 +985,9 @@ void Simulation::rebuild_neighbors() {
     const std::size_t pairs_at =
         join_thread_segment(t, m.build_begin, m.build_pair_j, m.build_pair_states, m.pair_offsets,
                             m.pair_j, m.pair_states);
-    for (std::size_t q = 0; q < pair_states.size(); ++q) {
-      m.pair_history[pairs_at + q] = pair_states[q].active() ? 1U : 0U;
+    const std::vector<PairState>& built_states = m.build_pair_states[t];
+    for (std::size_t q = 0; q < built_states.size(); ++q) {
+      m.pair_history[pairs_at + q] = built_states[q].active() ? 1U : 0U;
     }
     join_thread_segment(t, m.build_begin, m.build_wall_mesh, m.build_wall_triangle,
                         m.wall_list_offsets, m.wall_list_mesh, m.wall_list_triangle);
