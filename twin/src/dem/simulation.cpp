@@ -37,6 +37,11 @@ struct ThreadTally {  // per-thread sums, reduced in thread order
   char padding[64] = {};  // keep threads' tallies on separate cache lines
 };
 
+// Thread t's equal share [begin, end) of n particles: the share it clears, sums and kicks.
+std::pair<std::size_t, std::size_t> equal_share(std::size_t n, std::size_t t, std::size_t threads) {
+  return {n * t / threads, n * (t + 1) / threads};
+}
+
 // Applies a permutation (new index n takes old index order[n]) using a scratch vector of the
 // same capacity, then swaps: no allocation once both have their capacity.
 // values becomes values[order[0]], values[order[1]], ... (stride elements per index): a
@@ -182,7 +187,10 @@ struct Simulation::Impl {
   // listed under its own particles with j > i, so it writes no force below
   // min(particle_begin[t], bond_low[t]): its buffer is cleared and summed from there only.
   std::vector<std::uint32_t> bond_low;
-  std::vector<std::uint32_t> written_from;  // this force pass's, per thread (see bond_low)
+  // The first particle index thread t (> 0) can write in its force buffer (see bond_low).
+  [[nodiscard]] std::size_t buffer_written_from(std::size_t t, std::size_t n) const {
+    return std::min<std::size_t>({particle_begin[t], bond_low[t], n});
+  }
   // per particle: its listed pairs that held contact history at the last build, the pairs the
   // laws will run on; they weigh the threads' particle ranges
   std::vector<std::uint32_t> contacts_at_build;
@@ -264,7 +272,6 @@ Simulation::Simulation(std::shared_ptr<const Model> model)
   m.tallies.resize(static_cast<std::size_t>(m.threads));
   m.force_buffers.resize(static_cast<std::size_t>(m.threads));
   m.torque_buffers.resize(static_cast<std::size_t>(m.threads));
-  m.written_from.assign(static_cast<std::size_t>(m.threads), 0);
   m.wall_force_buffers.assign(static_cast<std::size_t>(m.threads),
                               std::vector<Vec3>(wall_count, Vec3::Zero()));
   m.wall_torque_buffers.assign(static_cast<std::size_t>(m.threads),
@@ -467,14 +474,10 @@ void Simulation::assign_bond_laws() {
     m.bond_begin[t] = static_cast<std::uint32_t>(s.bonds.size() * t / threads);
   }
   m.bond_low.assign(threads, std::numeric_limits<std::uint32_t>::max());
-  for (std::size_t t = 0; t < threads; ++t) {
-    for (std::uint32_t k = m.bond_begin[t]; k < m.bond_begin[t + 1]; ++k) {
-      m.bond_low[t] = std::min({m.bond_low[t], s.bonds[k].i, s.bonds[k].j});
-    }
-  }
   stats_.bond_law_runs = 0;
   for (std::size_t t = 0; t < threads; ++t) {
     for (std::uint32_t k = m.bond_begin[t]; k < m.bond_begin[t + 1]; ++k) {
+      m.bond_low[t] = std::min({m.bond_low[t], s.bonds[k].i, s.bonds[k].j});
       if (k == m.bond_begin[t] || m.bond_laws[k] != m.bond_laws[k - 1]) ++stats_.bond_law_runs;
     }
   }
@@ -1055,18 +1058,15 @@ void Simulation::compute_forces() {
     // a barrier. Another thread's buffer is cleared from its lowest written index (bond_low)
     // only: below it the buffer is neither written nor read.
     const auto threads = static_cast<std::size_t>(m.active_threads);
-    const std::size_t share_begin = n * t / threads;
-    const std::size_t share_end = n * (t + 1) / threads;
+    const auto [share_begin, share_end] = equal_share(n, t, threads);
     std::fill(s.force_n.begin() + static_cast<std::ptrdiff_t>(share_begin),
               s.force_n.begin() + static_cast<std::ptrdiff_t>(share_end), Vec3::Zero());
     std::fill(s.torque_nm.begin() + static_cast<std::ptrdiff_t>(share_begin),
               s.torque_nm.begin() + static_cast<std::ptrdiff_t>(share_end), Vec3::Zero());
     if (t > 0) {
-      const std::size_t written_from =
-          std::min<std::size_t>({m.particle_begin[t], m.bond_low[t], n});
+      const std::size_t written_from = m.buffer_written_from(t, n);
       std::fill(force + written_from, force + n, Vec3::Zero());
       std::fill(torque + written_from, torque + n, Vec3::Zero());
-      m.written_from[t] = static_cast<std::uint32_t>(written_from);
     }
 #pragma omp barrier
     Vec3* wall_force = m.wall_force_buffers[t].data();
@@ -1327,10 +1327,9 @@ void Simulation::compute_forces() {
       // Each thread sums its equal share, the one it cleared and kicks next: the sum is per
       // particle, the same bits for any split. Below a buffer's written_from it holds no
       // force: +0, which would change nothing (the sums start at +0 and never reach -0).
-      const auto sum_begin = static_cast<std::uint32_t>(share_begin);
-      const auto sum_end = static_cast<std::uint32_t>(share_end);
       for (std::size_t b = 1; b < threads; ++b) {
-        for (std::uint32_t k = std::max(sum_begin, m.written_from[b]); k < sum_end; ++k) {
+        for (std::size_t k = std::max(share_begin, m.buffer_written_from(b, n)); k < share_end;
+             ++k) {
           s.force_n[k] += m.force_buffers[b][k];
           s.torque_nm[k] += m.torque_buffers[b][k];
         }
@@ -1427,10 +1426,8 @@ void Simulation::step(std::size_t count) {
       // the thread cleared and summed in compute_forces. Each particle's update is its own,
       // so the split changes no bits.
       const auto t = static_cast<std::size_t>(omp_get_thread_num());
-      const auto threads = static_cast<std::size_t>(m.active_threads);
-      const auto begin = static_cast<std::uint32_t>(n * t / threads);
-      const auto end = static_cast<std::uint32_t>(n * (t + 1) / threads);
-      for (std::uint32_t k = begin; k < end; ++k) {
+      const auto [begin, end] = equal_share(n, t, static_cast<std::size_t>(m.active_threads));
+      for (std::size_t k = begin; k < end; ++k) {
         if (finish_previous) half_kick(k);
         half_kick(k);
         s.position_m[k] += dt * s.velocity_m_per_s[k];
