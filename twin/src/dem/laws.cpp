@@ -102,6 +102,7 @@ class HertzMindlin final : public ContactLaw {
                                                 double overlap_m) const override {
     return 2.0 * youngs_pa_ * std::sqrt(effective_radius_m * overlap_m);
   }
+  [[nodiscard]] ChainStage chain_stage() const override { return ChainStage::kNormal; }
 
  private:
   double youngs_pa_;
@@ -117,6 +118,7 @@ class Coulomb final : public ContactLaw {
  public:
   Coulomb(const LawParameters& parameters, const PairMaterial&)
       : friction_coefficient_(parameters.at("friction_coefficient")) {}
+  [[nodiscard]] ChainStage chain_stage() const override { return ChainStage::kFriction; }
 
   void compute(const PairGeometry&, PairState& state, ForceAccumulator& f) const override {
     if (!f.touching) {
@@ -208,6 +210,9 @@ class Jkr final : public ContactLaw {
                ? -jkr_break_overlap_m(work_of_adhesion_, effective_radius_m, youngs_pa_)
                : 0.0;
   }
+  [[nodiscard]] ChainStage chain_stage() const override { return ChainStage::kAdhesion; }
+  // the Hertz force it takes out of the normal force (compute) is hertz_mindlin's
+  [[nodiscard]] std::string_view replaces_part_of() const override { return "hertz_mindlin"; }
 
  private:
   // The terms that depend on the pair's radius only: the cube roots that start and bound the
@@ -528,6 +533,7 @@ class RollingResistance final : public ContactLaw {
  public:
   RollingResistance(const LawParameters& parameters, const PairMaterial&)
       : rolling_friction_(parameters.at("rolling_friction")) {}
+  [[nodiscard]] ChainStage chain_stage() const override { return ChainStage::kMoment; }
 
   void compute(const PairGeometry& g, PairState&, ForceAccumulator& f) const override {
     if (!f.touching) return;
@@ -562,6 +568,7 @@ class StaticKineticFriction final : public ContactLaw {
           "law 'static_kinetic_friction': kinetic_friction_coefficient above the static one");
     }
   }
+  [[nodiscard]] ChainStage chain_stage() const override { return ChainStage::kFriction; }
 
   void compute(const PairGeometry& g, PairState& state, ForceAccumulator& f) const override {
     if (!f.touching) {
@@ -611,6 +618,7 @@ class WetFilm final : public ContactLaw {
   WetFilm(const LawParameters& parameters, const PairMaterial&)
       : lubrication_(parameters.at("lubrication")),
         surface_tension_(parameters.at("surface_tension_n_per_m")) {}
+  [[nodiscard]] ChainStage chain_stage() const override { return ChainStage::kLoadModifier; }
 
   void compute(const PairGeometry& g, PairState&, ForceAccumulator& f) const override {
     if (!f.touching) return;
@@ -705,6 +713,63 @@ std::vector<std::string> keys_of(const Map& map) {
 }
 
 }  // namespace
+
+std::string_view chain_stage_name(ChainStage stage) {
+  switch (stage) {
+    case ChainStage::kNormal:
+      return "normal force";
+    case ChainStage::kAdhesion:
+      return "adhesion";
+    case ChainStage::kLoadModifier:
+      return "load modifier";
+    case ChainStage::kFriction:
+      return "friction";
+    case ChainStage::kMoment:
+      return "moment";
+  }
+  return "unknown";
+}
+
+namespace {
+// Friction and moments both read the load and neither writes what the other reads: one rank.
+int chain_rank(ChainStage stage) {
+  return stage == ChainStage::kMoment ? static_cast<int>(ChainStage::kFriction)
+                                      : static_cast<int>(stage);
+}
+}  // namespace
+
+void check_contact_chain(std::string_view where, const std::vector<std::string>& names,
+                         const std::vector<std::unique_ptr<ContactLaw>>& laws) {
+  const auto refuse = [&](const std::string& what) {
+    throw std::invalid_argument(std::string(where) + ": contact laws " + what +
+                                " (a chain runs: normal force, adhesion, load modifiers, then "
+                                "friction and moments)");
+  };
+  const auto described = [&](std::size_t k) {
+    return "'" + names[k] + "' (" + std::string(chain_stage_name(laws[k]->chain_stage())) + ")";
+  };
+  for (std::size_t k = 0; k < laws.size(); ++k) {
+    const ChainStage stage = laws[k]->chain_stage();
+    if (k == 0 && stage != ChainStage::kNormal) {
+      refuse("start with " + described(k) + ": it has no normal force to act on");
+    }
+    if (k > 0 && stage == ChainStage::kNormal) {
+      refuse("hold a second normal-force law, " + described(k) + " after '" + names[0] + "'");
+    }
+    if (k > 0 && chain_rank(stage) < chain_rank(laws[k - 1]->chain_stage())) {
+      refuse("list " + described(k) + " after " + described(k - 1) + ": put it before");
+    }
+    const auto earlier_end = names.begin() + static_cast<std::ptrdiff_t>(k);
+    if (std::find(names.begin(), earlier_end, names[k]) != earlier_end) {
+      refuse("name '" + names[k] + "' twice");
+    }
+    const std::string_view replaced = laws[k]->replaces_part_of();
+    if (!replaced.empty() && std::find(names.begin(), earlier_end, replaced) == earlier_end) {
+      refuse("list " + described(k) + " without '" + std::string(replaced) +
+             "' before it, whose force it replaces in part");
+    }
+  }
+}
 
 std::unique_ptr<ContactChain> make_contact_chain(
     const std::vector<std::unique_ptr<ContactLaw>>& laws) {

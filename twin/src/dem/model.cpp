@@ -53,10 +53,15 @@ Model::Model(ModelSpec spec, const LawRegistry& registry) : spec_(std::move(spec
       entry.material = make_pair_material(material_of_type(first), material_of_type(second),
                                           wall_type[first] || wall_type[second]);
       entry.contact_laws.clear();
+      std::vector<std::string> names;
       for (const LawSpec& law : interaction.contact_laws) {
         entry.contact_laws.push_back(
             registry.create_contact_law(law.name, law.parameters, entry.material));
+        names.push_back(law.name);
       }
+      check_contact_chain(
+          "dem model: interaction " + spec_.types[first].name + "-" + spec_.types[second].name,
+          names, entry.contact_laws);
       entry.contact_chain = make_contact_chain(entry.contact_laws);
       entry.bond_law = interaction.bond_law ? registry.create_bond_law(
                                                   interaction.bond_law->name,

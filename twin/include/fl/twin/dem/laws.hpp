@@ -18,6 +18,7 @@
 //       if (f.touching) f.friction_normal_load_n /= 1.0 + drop_ *
 //       g.relative_velocity_m_per_s.norm();
 //     }
+//     ChainStage chain_stage() const override { return ChainStage::kLoadModifier; }
 //    private:
 //     double drop_;
 //   };
@@ -28,7 +29,7 @@
 //
 // The YAML reader (config.hpp) then accepts `speed_weakening: {friction_drop_per_m_per_s: 2}`
 // in an interaction's contact chain (before coulomb) with strict range checks taken from the
-// parameter list.
+// parameter list; its chain stage tells Model where in a chain the law may stand.
 //
 // Units are SI (m, kg, s, N); names carry units where not obvious.
 #pragma once
@@ -98,11 +99,30 @@ struct ForceAccumulator {
   bool touching = false;          // some law produced a force this step
 };
 
+// Where a contact law belongs in its chain. The laws of a chain run in order on one
+// accumulator, each reading what the laws before it wrote, so a chain lists its laws by stage
+// (laws of one stage keep the order given; friction and moments only read the load, so those
+// two may come in either order). Model refuses a chain out of this order (see
+// check_contact_chain): a friction law placed before the normal law, for one, would find no
+// load and leave the contact frictionless without a word.
+enum class ChainStage {
+  kNormal,        // the normal force and the friction load from the overlap (hertz_mindlin)
+  kAdhesion,      // replaces part of that normal force (jkr)
+  kLoadModifier,  // changes the normal force or the friction load (wet_film)
+  kFriction,      // limits the tangential force by the load (coulomb, static_kinetic_friction)
+  kMoment,        // moments that scale with the load (rolling_resistance)
+};
+[[nodiscard]] std::string_view chain_stage_name(ChainStage stage);
+
 class ContactLaw {
  public:
   virtual ~ContactLaw() = default;
   virtual void compute(const PairGeometry& geometry, PairState& state,
                        ForceAccumulator& force) const = 0;
+  [[nodiscard]] virtual ChainStage chain_stage() const = 0;
+  // The registered name of the law whose force this one replaces in part, which must come
+  // earlier in the chain (jkr takes hertz_mindlin's Hertz force out); empty if none.
+  [[nodiscard]] virtual std::string_view replaces_part_of() const { return {}; }
   // Largest gap (m) at which the law still acts, for a pair of this effective radius
   // (adhesion necks); 0 for laws that act only on overlap.
   [[nodiscard]] virtual double range_m(double effective_radius_m) const {
@@ -129,6 +149,13 @@ class ContactChain {
                        ForceAccumulator& force) const = 0;
   [[nodiscard]] virtual bool fused() const = 0;
 };
+
+// Checks a chain before it runs: one normal-force law, first; the others in stage order; no
+// law twice; a law that replaces part of another's force after that law. Throws
+// std::invalid_argument naming `where` (e.g. the interaction's types), the law and the rule.
+// `names` are the laws' registered names, in the order of `laws`.
+void check_contact_chain(std::string_view where, const std::vector<std::string>& names,
+                         const std::vector<std::unique_ptr<ContactLaw>>& laws);
 // The laws must outlive the chain (the Model owns both).
 std::unique_ptr<ContactChain> make_contact_chain(
     const std::vector<std::unique_ptr<ContactLaw>>& laws);
