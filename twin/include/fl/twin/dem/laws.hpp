@@ -156,6 +156,7 @@ class ContactChain {
 // `names` are the laws' registered names, in the order of `laws`.
 void check_contact_chain(std::string_view where, const std::vector<std::string>& names,
                          const std::vector<std::unique_ptr<ContactLaw>>& laws);
+
 // The laws must outlive the chain (the Model owns both).
 std::unique_ptr<ContactChain> make_contact_chain(
     const std::vector<std::unique_ptr<ContactLaw>>& laws);
