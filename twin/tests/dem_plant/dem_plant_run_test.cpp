@@ -2,7 +2,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <cstring>
 
 #include "dem_plant_test_support.hpp"
 #include "fl/apps/closed_loop.hpp"
@@ -47,7 +46,7 @@ TEST(DemPlantRun, ViewsCarryTheTableSizeOfTheirTemplate) {
   const auto& templates = rig.plant->templates();
   ASSERT_EQ(templates.size(), 6U);  // three sizes, each left and right
   // The renderer's rows, in its order (fillet_renderer.hpp, FilletInstance::size_variant).
-  const char* const kRowPrefix[] = {"s144x72x40", "s172x72x32", "s176x72x40"};
+  constexpr const char* kRowPrefix[] = {"s144x72x40", "s172x72x32", "s176x72x40"};
   for (std::uint8_t variant = 0; variant < 6; ++variant) {
     DemFilletSpawn spawn;
     spawn.variant = variant;
@@ -121,7 +120,7 @@ TEST(DemPlantRun, SameSeedAndThreadsGiveIdenticalImages) {
   for (int i = 0; i < 60; ++i) {  // 0.6 s: the leveller spins up and places fillets
     a->step();
     b->step();
-    ASSERT_EQ(std::memcmp(&a->in, &b->in, sizeof(InputImage)), 0) << "differs at step " << i;
+    ASSERT_TRUE(a->in == b->in) << "differs at step " << i;
   }
   EXPECT_GT(a->plant->counters().fillets_spawned, 0U);
   EXPECT_EQ(a->plant->simulation().state().position_m, b->plant->simulation().state().position_m);

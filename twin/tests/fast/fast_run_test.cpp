@@ -162,11 +162,16 @@ TEST(FastRun, SameSeedGivesByteEqualImagesDifferentSeedsDiffer) {
   run(5, b);
   run(6, c);
   ASSERT_EQ(a.size(), b.size());
+  // Bit for bit: the injected camera faults put NaNs in the images, which == never matches.
+  // Every image starts value-initialised (zero padding) and is copied whole, so the padding
+  // bytes compare equal too.
   for (std::size_t i = 0; i < a.size(); ++i) {
+    // NOLINTNEXTLINE(bugprone-suspicious-memory-comparison)
     ASSERT_EQ(std::memcmp(&a[i], &b[i], sizeof(InputImage)), 0) << "image " << i;
   }
   std::size_t differing = 0;
   for (std::size_t i = 0; i < a.size(); ++i) {
+    // NOLINTNEXTLINE(bugprone-suspicious-memory-comparison)
     differing += std::memcmp(&a[i], &c[i], sizeof(InputImage)) != 0 ? 1U : 0U;
   }
   EXPECT_GT(differing, a.size() / 2);
@@ -186,8 +191,7 @@ TEST(FastRun, ResetRestartsTheSameSequence) {
       if (pass == 0) {
         first.push_back(in);
       } else {
-        ASSERT_EQ(std::memcmp(&first[static_cast<std::size_t>(i)], &in, sizeof(InputImage)), 0)
-            << i;
+        ASSERT_TRUE(first[static_cast<std::size_t>(i)] == in) << i;
       }
     }
     EXPECT_EQ(in.time_ns, 1000 * kScanNs);

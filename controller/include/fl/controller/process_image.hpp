@@ -127,6 +127,7 @@ struct FilletEstimate {
   Hand hand = Hand::kUnknown;
   SideUp side = SideUp::kUnknown;
   bool singulated = false;  // false: touching or overlapping fillets in one blob
+  bool operator==(const FilletEstimate&) const = default;
 };
 
 inline constexpr std::size_t kMaxEstimatesPerFrame = 8;
@@ -138,6 +139,7 @@ struct CameraFrame {
   std::uint32_t sequence = 0;
   std::uint8_t count = 0;  // valid entries in `estimates`
   std::array<FilletEstimate, kMaxEstimatesPerFrame> estimates{};
+  bool operator==(const CameraFrame&) const = default;
 };
 
 struct DriveFeedback {
@@ -145,6 +147,7 @@ struct DriveFeedback {
   std::int64_t encoder_counts = 0;  // monotonic within a run; sign follows direction
   bool ready = false;               // drive enabled and following its command
   bool fault = false;               // drive reports a fault (CiA 402 fault state)
+  bool operator==(const DriveFeedback&) const = default;
 };
 
 struct InputImage {
@@ -166,6 +169,8 @@ struct InputImage {
   bool start_request = false;
   bool stop_request = false;
   bool fault_reset_request = false;
+  // Member by member (determinism tests): memcmp would also compare the padding bytes.
+  bool operator==(const InputImage&) const = default;
 };
 
 // ---------------------------------------------------------------- outputs
@@ -174,6 +179,7 @@ struct DriveCommand {
   bool enable = false;
   float speed_mps = 0.0F;   // target surface speed, negative reverses
   float accel_mps2 = 0.0F;  // ramp the drive must keep (within its configured limit)
+  bool operator==(const DriveCommand&) const = default;
 };
 
 struct OutputImage {
@@ -190,6 +196,7 @@ struct OutputImage {
   bool final_reject = false;  // air knife at the end that blows a fillet off the outfeed
   LineState state = LineState::kStopped;
   std::uint32_t active_faults = 0;  // bit set of FaultCode
+  bool operator==(const OutputImage&) const = default;
 };
 
 static_assert(std::is_trivially_copyable_v<InputImage>);
