@@ -54,7 +54,8 @@ constexpr const char* kTwinFifo = "49";
 constexpr double kInSpecTolerance = 0.01;
 constexpr double kThroughputTolerance = 0.05;
 
-struct TwoProcessRun {
+// clang-tidy 14 cannot prove nlohmann::json's implicit members noexcept.
+struct TwoProcessRun {  // NOLINT(bugprone-exception-escape)
   int control_exit = -1;
   int twin_exit = -1;
   std::string logs;
@@ -204,7 +205,8 @@ void write_tolerant_line_config(const fs::path& file) {
 
 // One side of a two-process run dies mid-run (SIGKILL: no goodbye on the bus). Each process
 // must see it within its stale limit and take its safe reaction on its own.
-struct PeerLossRun {
+// clang-tidy 14 cannot prove nlohmann::json's implicit members noexcept.
+struct PeerLossRun {  // NOLINT(bugprone-exception-escape)
   int control_exit = -1;
   int twin_exit = -1;
   std::vector<fl_FaultReport> faults;  // what a subscriber of fl/line/faults received

@@ -6,6 +6,8 @@
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cstdio>
+#include <exception>
 #include <fstream>
 #include <functional>
 #include <map>
@@ -29,7 +31,7 @@ std::filesystem::path resolve_mesh(const std::filesystem::path& mesh,
 
 }  // namespace
 
-int main(int argc, char** argv) {
+static int checked_main(int argc, char** argv) {
   CLI::App app{"demlab: the thesis' DEM model tests, written as CSV, SVG and Markdown"};
   app.require_subcommand(1);
   app.fallthrough();
@@ -83,8 +85,9 @@ int main(int argc, char** argv) {
     fl::model_tests::apply_common(context.config, common);
     context.out_dir = out_dir;
     context.threads = threads;
-    for (int k = 0; k < argc; ++k)
+    for (int k = 0; k < argc; ++k) {
       context.command_line += (k > 0 ? " " : "") + std::string(argv[k]);
+    }
     std::filesystem::create_directories(out_dir);
     spdlog::info("demlab: {} mm spheres, fillet {} from {}, {} threads, output {}",
                  common.sub_particle_radius_m * 1e3,
@@ -119,4 +122,17 @@ int main(int argc, char** argv) {
     spdlog::error("{}", e.what());
     return 1;
   }
+}
+
+int main(int argc, char** argv) {
+  // What escapes the commands' own handling (an option table that throws, memory): a message
+  // and exit status 1 instead of std::terminate.
+  try {
+    return checked_main(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "demlab: %s\n", error.what());
+  } catch (...) {
+    std::fprintf(stderr, "demlab: unknown error\n");
+  }
+  return 1;
 }

@@ -16,6 +16,8 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -173,7 +175,7 @@ int run_command(const RunArgs& args) {
 }  // namespace
 }  // namespace fl::apps
 
-int main(int argc, char** argv) {
+static int checked_main(int argc, char** argv) {
   using namespace fl::apps;
   CLI::App app{"linectl: real-time line controller for the chicken-fillet line"};
   app.require_subcommand(1);
@@ -323,4 +325,17 @@ int main(int argc, char** argv) {
     return 1;
   }
   return 0;
+}
+
+int main(int argc, char** argv) {
+  // What escapes the commands' own handling (an option table that throws, memory): a message
+  // and exit status 1 instead of std::terminate.
+  try {
+    return checked_main(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "linectl: %s\n", error.what());
+  } catch (...) {
+    std::fprintf(stderr, "linectl: unknown error\n");
+  }
+  return 1;
 }

@@ -8,6 +8,7 @@
 #include <csignal>
 #include <cstdint>
 #include <cstdio>
+#include <exception>
 
 #include "fl/controller/cycle_stats.hpp"
 #include "fl/controller/runtime.hpp"
@@ -60,7 +61,7 @@ void print_distribution(const char* name, const fl::DistributionSummary& summary
 
 }  // namespace
 
-int main(int argc, char** argv) {
+static int checked_main(int argc, char** argv) {
   CLI::App app{"Scan runtime wake-up latency, in cyclictest's units (us)"};
   double period_us = 10'000.0;
   double duration_s = 60.0;
@@ -123,4 +124,17 @@ int main(int argc, char** argv) {
       static_cast<unsigned long long>(stats.overruns), to_us(stats.compute.p999_ns),
       to_us(stats.compute.max_ns));
   return runtime.fault() == fl::RuntimeFault::kNone ? 0 : 2;
+}
+
+int main(int argc, char** argv) {
+  // What escapes the commands' own handling (an option table that throws, memory): a message
+  // and exit status 1 instead of std::terminate.
+  try {
+    return checked_main(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "fl_jitter: %s\n", error.what());
+  } catch (...) {
+    std::fprintf(stderr, "fl_jitter: unknown error\n");
+  }
+  return 1;
 }

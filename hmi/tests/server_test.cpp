@@ -75,7 +75,8 @@ class Socket {
   int fd_;
 };
 
-struct HttpResponse {
+// clang-tidy 14 cannot prove nlohmann::json's implicit members noexcept.
+struct HttpResponse {  // NOLINT(bugprone-exception-escape)
   int status = 0;
   std::string headers;
   nlohmann::json body;
@@ -159,7 +160,8 @@ class WebSocketClient {
     }
     const std::array<char, 4> mask = {0x12, 0x34, 0x56, 0x78};
     frame.append(mask.data(), mask.size());
-    for (std::size_t i = 0; i < text.size(); ++i) frame.push_back(text[i] ^ mask[i % 4]);
+    for (std::size_t i = 0; i < text.size(); ++i)
+      frame.push_back(static_cast<char>(text[i] ^ mask[i % 4]));
     socket_.send_all(frame);
   }
 

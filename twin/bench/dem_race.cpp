@@ -5,11 +5,12 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdio>
+#include <exception>
 #include <string>
 
 #include "dem_scenarios.hpp"
 
-int main(int argc, char** argv) {
+static int checked_main(int argc, char** argv) {
   CLI::App app{"time one DEM race scenario (particle-steps per second)"};
   std::string scenario;
   std::string tag;
@@ -65,4 +66,17 @@ int main(int argc, char** argv) {
                : vector_bonds             ? "avx2"
                                           : "scalar");
   return 0;
+}
+
+int main(int argc, char** argv) {
+  // What escapes the commands' own handling (an option table that throws, memory): a message
+  // and exit status 1 instead of std::terminate.
+  try {
+    return checked_main(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "dem_race: %s\n", error.what());
+  } catch (...) {
+    std::fprintf(stderr, "dem_race: unknown error\n");
+  }
+  return 1;
 }

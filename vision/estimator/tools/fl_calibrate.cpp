@@ -9,6 +9,7 @@
 // an invalid calibration file (every problem named with file, key and line).
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <exception>
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
 
@@ -25,7 +26,7 @@ cv::Mat read_image(const std::string& path) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+static int checked_main(int argc, char** argv) {
   CLI::App app{"Calibrates a line camera from checkerboard pictures (belt-plane homography)."};
   std::string camera_name;
   std::string board_text = "9x6";
@@ -75,6 +76,7 @@ int main(int argc, char** argv) {
     std::optional<fl::vision::IntrinsicsResult> intrinsics;
     if (!intrinsic_images.empty()) {
       std::vector<cv::Mat> views;
+      views.reserve(intrinsic_images.size());
       for (const auto& path : intrinsic_images) views.push_back(read_image(path));
       intrinsics = fl::vision::calibrate_intrinsics(views, board, fix_distortion);
       std::printf("intrinsics: %d views, rms %.3f px, fx %.2f fy %.2f cx %.2f cy %.2f\n",
@@ -97,8 +99,9 @@ int main(int argc, char** argv) {
     }
     fl::vision::BeltFrameDefinition frame;
     frame.board_yaw_rad = board_yaw_deg * std::numbers::pi / 180.0;
-    if (board_origin_mm.size() == 2)
+    if (board_origin_mm.size() == 2) {
       frame.board_origin_mm = cv::Point2d(board_origin_mm[0], board_origin_mm[1]);
+    }
     const auto calibration = fl::vision::calibrate_belt_plane(read_image(belt_image), board,
                                                               intrinsics, frame, camera_name);
     fl::vision::save_calibration(out_file, calibration);
@@ -115,4 +118,17 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "fl_calibrate: %s\n", error.what());
     return 1;
   }
+}
+
+int main(int argc, char** argv) {
+  // What escapes the commands' own handling (an option table that throws, memory): a message
+  // and exit status 1 instead of std::terminate.
+  try {
+    return checked_main(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "fl_calibrate: %s\n", error.what());
+  } catch (...) {
+    std::fprintf(stderr, "fl_calibrate: unknown error\n");
+  }
+  return 1;
 }

@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -102,7 +103,7 @@ void write_summary_json(const fl::BulkRunSummary& summary, const fl::BulkRunOpti
 
 }  // namespace
 
-int main(int argc, char** argv) {
+static int checked_main(int argc, char** argv) {
   CLI::App app{"the thesis' bulk experiment as one timed DEM run (thesis 6.1)"};
   std::string config_file = "config/bulk_thesis.yaml";
   std::string out_dir = "out/bulk_run";
@@ -248,4 +249,17 @@ int main(int argc, char** argv) {
     return 1;
   }
   return 0;
+}
+
+int main(int argc, char** argv) {
+  // What escapes the commands' own handling (an option table that throws, memory): a message
+  // and exit status 1 instead of std::terminate.
+  try {
+    return checked_main(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "bulk_run: %s\n", error.what());
+  } catch (...) {
+    std::fprintf(stderr, "bulk_run: unknown error\n");
+  }
+  return 1;
 }

@@ -11,7 +11,7 @@
 
 #include "fl/twin/dem_bulk/bulk_scene.hpp"
 
-int main(int argc, char** argv) {
+static int checked_main(int argc, char** argv) {
   CLI::App app{"the DEM mailbox's outflow against its gate opening (thesis 6.1)"};
   std::string config_file = "config/bulk_dem.yaml";
   std::string out_file = "out/bulk_sweep.csv";
@@ -48,4 +48,17 @@ int main(int argc, char** argv) {
     return 1;
   }
   return 0;
+}
+
+int main(int argc, char** argv) {
+  // What escapes the commands' own handling (an option table that throws, memory): a message
+  // and exit status 1 instead of std::terminate.
+  try {
+    return checked_main(argc, argv);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "bulk_sweep: %s\n", error.what());
+  } catch (...) {
+    std::fprintf(stderr, "bulk_sweep: unknown error\n");
+  }
+  return 1;
 }
