@@ -408,10 +408,10 @@ cv::Vec3d shade(const PreparedFillet& p, double u, double v, double h_scaled_mm,
     albedo *= 1.0 + kMottleContrast * sample_texture(p.mottle, tc, tr);
   } else {
     // Fibres follow a direction turned by the fillet's fibre angle.
-    const double cu = s.min_u_mm + 0.5 * s.height_mm.cols * kHeightCellMm;
-    const double cv_ = s.min_v_mm + 0.5 * s.height_mm.rows * kHeightCellMm;
-    const double fu = cu + p.fibre_cos * (u - cu) + p.fibre_sin * (v - cv_);
-    const double fv = cv_ - p.fibre_sin * (u - cu) + p.fibre_cos * (v - cv_);
+    const double mid_u = s.min_u_mm + 0.5 * s.height_mm.cols * kHeightCellMm;
+    const double mid_v = s.min_v_mm + 0.5 * s.height_mm.rows * kHeightCellMm;
+    const double fu = mid_u + p.fibre_cos * (u - mid_u) + p.fibre_sin * (v - mid_v);
+    const double fv = mid_v - p.fibre_sin * (u - mid_u) + p.fibre_cos * (v - mid_v);
     albedo *= 1.0 + kFibreContrast * sample_texture(p.fibre, (fu - s.min_u_mm) / kTextureCellMm,
                                                     (fv - s.min_v_mm) / kTextureCellMm);
     const double fat_value = sample_texture(p.fat, tc, tr);
@@ -465,7 +465,7 @@ FilletRenderer::FilletRenderer(int shape_variants, std::uint64_t shape_seed)
                    : random_shape(shape_seed * 1000003ULL + static_cast<std::uint64_t>(shape)));
     for (const auto& variant : variants) {
       const int size = static_cast<int>(&variant - variants.data()) / 2;
-      const Hand hand = variant.side == dem::FilletSide::left ? Hand::kLeft : Hand::kRight;
+      const Hand hand = variant.side == dem::FilletSide::kLeft ? Hand::kLeft : Hand::kRight;
       const dem::TriangleMesh skin_up = dem::make_variant_mesh(base, variant);
       // Bone side up: turned over about the long axis (a half turn: y -> -y and z -> -z).
       dem::TriangleMesh bone_up = skin_up;

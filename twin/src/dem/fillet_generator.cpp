@@ -81,7 +81,7 @@ FilletTemplate generate_fillet_template(const TriangleMesh& mesh_m, const std::s
             origin_m + pitch_m * Eigen::Vector3d(static_cast<double>(i), static_cast<double>(j),
                                                  static_cast<double>(k));
         if (!contains_point(mesh_m, centre_m)) continue;
-        if (options.inclusion == RasterInclusion::sphere_inside &&
+        if (options.inclusion == RasterInclusion::kSphereInside &&
             distance_to_surface(mesh_m, centre_m) < radius_m - options.sphere_protrusion_m) {
           continue;
         }
@@ -106,8 +106,9 @@ FilletTemplate generate_fillet_template(const TriangleMesh& mesh_m, const std::s
   for (const auto& centre : centres_m) result.positions_m.push_back(centre - centroid_m);
   result.radii_m.assign(count, radius_m);
   result.types.reserve(count);
-  for (const auto& index : indices)
+  for (const auto& index : indices) {
     result.types.push_back(is_type_a(index) ? kFilletTypeA : kFilletTypeB);
+  }
 
   // Each raster column's thickness, bottom of its lowest sphere to top of its highest: where a
   // bond sits in a thin tip or a thick rear (graded bond laws scale with it).
@@ -130,12 +131,13 @@ FilletTemplate generate_fillet_template(const TriangleMesh& mesh_m, const std::s
   const double contact_radius_m = options.contact_radius_factor * radius_m;
   const double bond_distance_m =
       2.0 * contact_radius_m *
-      (options.bond_limit == BondLimit::inclusive ? 1.0 + kBondLimitSlack : 1.0 - kBondLimitSlack);
+      (options.bond_limit == BondLimit::kInclusive ? 1.0 + kBondLimitSlack : 1.0 - kBondLimitSlack);
   const auto reach = static_cast<std::int64_t>(std::floor(bond_distance_m / pitch_m));
   std::unordered_map<RasterIndex, std::uint32_t, RasterIndexHash> index_of;
   index_of.reserve(count);
-  for (std::size_t n = 0; n < count; ++n)
+  for (std::size_t n = 0; n < count; ++n) {
     index_of.emplace(indices[n], static_cast<std::uint32_t>(n));
+  }
   for (std::size_t n = 0; n < count; ++n) {
     const auto& here = indices[n];
     for (std::int64_t dk = 0; dk <= reach; ++dk) {
@@ -145,7 +147,7 @@ FilletTemplate generate_fillet_template(const TriangleMesh& mesh_m, const std::s
           if (!forward || ((di + dj + dk) & 1) == 0) continue;  // same type: never bonded
           const double distance_m =
               pitch_m * std::sqrt(static_cast<double>(di * di + dj * dj + dk * dk));
-          const bool bonded = options.bond_limit == BondLimit::inclusive
+          const bool bonded = options.bond_limit == BondLimit::kInclusive
                                   ? distance_m <= bond_distance_m
                                   : distance_m < bond_distance_m;
           if (!bonded) continue;
@@ -182,7 +184,7 @@ std::vector<FilletTemplate> generate_thesis_fillets(const TriangleMesh& base_mes
   std::vector<FilletTemplate> templates;
   for (const auto& variant : thesis_fillet_variants()) {
     auto variant_options = options;
-    if (variant.side == FilletSide::right) variant_options.raster_offset_m.y() *= -1.0;
+    if (variant.side == FilletSide::kRight) variant_options.raster_offset_m.y() *= -1.0;
     templates.push_back(generate_fillet_template(make_variant_mesh(base_mesh_m, variant),
                                                  variant.name, variant_options));
   }

@@ -116,11 +116,11 @@ std::vector<FilletVariant> thesis_fillet_variants() {
   constexpr Size kTable31[] = {{144, 72, 40}, {172, 72, 32}, {176, 72, 40}};
   std::vector<FilletVariant> variants;
   for (const auto& size : kTable31) {
-    for (const auto side : {FilletSide::left, FilletSide::right}) {
+    for (const auto side : {FilletSide::kLeft, FilletSide::kRight}) {
       FilletVariant variant;
       variant.name = "s" + std::to_string(size.length_mm) + "x" + std::to_string(size.width_mm) +
                      "x" + std::to_string(size.thickness_mm) +
-                     (side == FilletSide::left ? "_left" : "_right");
+                     (side == FilletSide::kLeft ? "_left" : "_right");
       variant.length_m = size.length_mm * 1e-3;
       variant.width_m = size.width_mm * 1e-3;
       variant.thickness_m = size.thickness_mm * 1e-3;
@@ -137,7 +137,7 @@ TriangleMesh make_variant_mesh(const TriangleMesh& base, const FilletVariant& va
   }
   auto mesh =
       fit_to_box(base, Eigen::Vector3d(variant.length_m, variant.width_m, variant.thickness_m));
-  if (variant.side == FilletSide::right) mesh = mirrored(mesh, 1);
+  if (variant.side == FilletSide::kRight) mesh = mirrored(mesh, 1);
   return translated(mesh, -volume_centroid(mesh));
 }
 

@@ -119,8 +119,9 @@ class MeshBuilder {
   void add_facet(const std::array<Eigen::Vector3d, 3>& corners) {
     ++facets_;
     IndexedTriangle triangle{};
-    for (std::size_t corner = 0; corner < 3; ++corner)
+    for (std::size_t corner = 0; corner < 3; ++corner) {
       triangle[corner] = welder_.add(corners[corner]);
+    }
     if (triangle[0] == triangle[1] || triangle[1] == triangle[2] || triangle[0] == triangle[2]) {
       ++degenerate_;
       return;
@@ -129,7 +130,7 @@ class MeshBuilder {
   }
 
   StlReadResult finish(StlFormat format, std::string solid_name) {
-    if (facets_ == 0) throw StlError(StlErrorKind::empty, source_, "the file holds no facets");
+    if (facets_ == 0) throw StlError(StlErrorKind::kEmpty, source_, "the file holds no facets");
     StlReadResult result;
     result.format = format;
     result.solid_name = std::move(solid_name);
@@ -143,7 +144,7 @@ class MeshBuilder {
         std::ostringstream what;
         what << "the mesh is not closed after welding corners within " << options_.weld_tolerance
              << ": " << topology.describe();
-        throw StlError(StlErrorKind::not_closed, source_, what.str());
+        throw StlError(StlErrorKind::kNotClosed, source_, what.str());
       }
     }
     if (options_.scale != 1.0) {
@@ -164,7 +165,7 @@ class MeshBuilder {
 StlReadResult parse_binary(std::string_view bytes, const std::string& source,
                            const StlReadOptions& options) {
   if (bytes.size() < kBinaryPreambleBytes) {
-    throw StlError(StlErrorKind::truncated, source,
+    throw StlError(StlErrorKind::kTruncated, source,
                    "truncated binary STL: the file has " + std::to_string(bytes.size()) +
                        " bytes, the 80-byte header and facet count need 84");
   }
@@ -172,7 +173,7 @@ StlReadResult parse_binary(std::string_view bytes, const std::string& source,
   const std::uint64_t expected_bytes = kBinaryPreambleBytes + facet_count * kBinaryFacetBytes;
   if (bytes.size() != expected_bytes) {
     const bool shorter = bytes.size() < expected_bytes;
-    throw StlError(shorter ? StlErrorKind::truncated : StlErrorKind::size_mismatch, source,
+    throw StlError(shorter ? StlErrorKind::kTruncated : StlErrorKind::kSizeMismatch, source,
                    std::string(shorter ? "truncated binary STL" : "binary STL size mismatch") +
                        ": the header says " + std::to_string(facet_count) + " facets (" +
                        std::to_string(expected_bytes) + " bytes) but the file has " +
@@ -195,7 +196,7 @@ StlReadResult parse_binary(std::string_view bytes, const std::string& source,
         // Skip the 12-byte normal; corner coordinates follow as float32.
         const double value = read_f32_le(record + 12 + 12 * corner + 4 * axis);
         if (!std::isfinite(value)) {
-          throw StlError(StlErrorKind::non_finite, source,
+          throw StlError(StlErrorKind::kNonFinite, source,
                          "facet " + std::to_string(facet) + " corner " + std::to_string(corner) +
                              " has a " + describe_coordinate(value) + " coordinate");
         }
@@ -204,7 +205,7 @@ StlReadResult parse_binary(std::string_view bytes, const std::string& source,
     }
     builder.add_facet(corners);
   }
-  return builder.finish(StlFormat::binary, solid_name);
+  return builder.finish(StlFormat::kBinary, solid_name);
 }
 
 // Whitespace-separated tokens with the line each starts on.
@@ -279,12 +280,12 @@ class AsciiParser {
       first_solid = false;
       parse_facets_until_endsolid();
     } while (!lexer_.at_end());
-    return builder_.finish(StlFormat::ascii, solid_name);
+    return builder_.finish(StlFormat::kAscii, solid_name);
   }
 
  private:
   [[noreturn]] void fail(std::size_t line, const std::string& what) const {
-    throw StlError(StlErrorKind::syntax, source_, "line " + std::to_string(line) + ": " + what);
+    throw StlError(StlErrorKind::kSyntax, source_, "line " + std::to_string(line) + ": " + what);
   }
 
   static std::string shown(std::string_view token) {
@@ -313,7 +314,7 @@ class AsciiParser {
            "expected a number (" + std::string(what) + ") but found " + shown(token.text));
     }
     if (!std::isfinite(value)) {
-      throw StlError(StlErrorKind::non_finite, source_,
+      throw StlError(StlErrorKind::kNonFinite, source_,
                      "line " + std::to_string(token.line) + ": " + std::string(what) + " is " +
                          describe_coordinate(value));
     }
@@ -386,7 +387,7 @@ StlReadResult parse_stl(std::string_view bytes, const std::string& source,
     throw std::invalid_argument(
         "StlReadOptions: weld_tolerance must be >= 0, scale finite and non-zero");
   }
-  if (bytes.empty()) throw StlError(StlErrorKind::empty, source, "the file is empty");
+  if (bytes.empty()) throw StlError(StlErrorKind::kEmpty, source, "the file is empty");
   // ASCII STL never contains NUL bytes; a "solid" header with NULs is a binary file.
   const bool has_nul = bytes.find('\0') != std::string_view::npos;
   if (binary_size_matches(bytes) || !starts_with_solid(bytes) || has_nul) {
@@ -400,11 +401,11 @@ StlReadResult read_stl(const std::filesystem::path& file, const StlReadOptions& 
   if (!stream) {
     std::error_code error;
     const bool exists = std::filesystem::exists(file, error);
-    throw StlError(StlErrorKind::cannot_open, file.string(),
+    throw StlError(StlErrorKind::kCannotOpen, file.string(),
                    exists ? "cannot open the file for reading" : "no such file");
   }
   std::string bytes((std::istreambuf_iterator<char>(stream)), std::istreambuf_iterator<char>());
-  if (stream.bad()) throw StlError(StlErrorKind::cannot_open, file.string(), "read error");
+  if (stream.bad()) throw StlError(StlErrorKind::kCannotOpen, file.string(), "read error");
   return parse_stl(bytes, file.string(), options);
 }
 
@@ -427,7 +428,7 @@ std::string format_stl(const TriangleMesh& mesh, const StlWriteOptions& options)
   }
 
   std::string out;
-  if (options.format == StlFormat::binary) {
+  if (options.format == StlFormat::kBinary) {
     // A binary header must not start with "solid", or readers may take it for ASCII.
     std::string header = "fl binary STL " + options.solid_name;
     header.resize(kBinaryHeaderBytes, '\0');
@@ -473,10 +474,10 @@ void write_stl(const std::filesystem::path& file, const TriangleMesh& mesh,
                const StlWriteOptions& options) {
   const auto bytes = format_stl(mesh, options);
   std::ofstream stream(file, std::ios::binary | std::ios::trunc);
-  if (!stream) throw StlError(StlErrorKind::cannot_write, file.string(), "cannot open for writing");
+  if (!stream) throw StlError(StlErrorKind::kCannotWrite, file.string(), "cannot open for writing");
   stream.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   stream.close();
-  if (!stream) throw StlError(StlErrorKind::cannot_write, file.string(), "write failed");
+  if (!stream) throw StlError(StlErrorKind::kCannotWrite, file.string(), "write failed");
 }
 
 }  // namespace fl::dem

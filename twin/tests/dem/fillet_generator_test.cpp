@@ -144,7 +144,7 @@ TEST_F(CubeRaster, ExclusiveLimitBondsFaceNeighboursOnly) {
 
 TEST_F(CubeRaster, InclusiveLimitAddsBodyDiagonals) {
   FilletGeneratorOptions options;
-  options.bond_limit = BondLimit::inclusive;
+  options.bond_limit = BondLimit::kInclusive;
   const auto fillet = generate_fillet_template(cube, "cube", options);
   // 300 face pairs + body-diagonal pairs: 4 diagonal directions x 4^3 = 256. Edge diagonals
   // (2r sqrt(2) = 11.3 mm < 13.9 mm) are in reach but same type: never bonded.
@@ -163,7 +163,7 @@ TEST_F(CubeRaster, ThesisTableValueBondsFaceNeighboursEvenInclusive) {
   // body diagonals whatever the limit rule, which is why `exclusive` is the default.
   FilletGeneratorOptions options;
   options.contact_radius_factor = 6.928 / 4.0;
-  options.bond_limit = BondLimit::inclusive;
+  options.bond_limit = BondLimit::kInclusive;
   EXPECT_EQ(generate_fillet_template(cube, "cube", options).bonds.size(), 300U);
 }
 
@@ -196,7 +196,7 @@ TEST_F(CubeRaster, RasterOffsetOfOnePitchSwapsTypes) {
 
 TEST_F(CubeRaster, SphereInsideDropsTheOuterLayer) {
   FilletGeneratorOptions options;
-  options.inclusion = RasterInclusion::sphere_inside;
+  options.inclusion = RasterInclusion::kSphereInside;
   // The +-16 mm layer touches the faces exactly (16 + 4 = 20 mm), a rounding tie; 1 nm of
   // allowed protrusion keeps it.
   options.sphere_protrusion_m = 1e-9;
@@ -293,7 +293,7 @@ TEST_F(NominalFillet, CountNearThesis) {
 
 TEST_F(NominalFillet, BondsAreAbOnlyWithinContactRadius) {
   expect_bonds_valid(*fillet_, 0.004 * std::sqrt(3.0), false);
-  // 6 bonds at interior spheres (face neighbours; see BondLimit::exclusive), fewer at the
+  // 6 bonds at interior spheres (face neighbours; see BondLimit::kExclusive), fewer at the
   // surface, none without any neighbour.
   const auto counts = bond_counts(*fillet_);
   const auto interior = interior_spheres(*fillet_, 0.008);
@@ -332,7 +332,7 @@ TEST_F(NominalFillet, BondThicknessFollowsTheTaperFromRearToTip) {
 
 TEST_F(NominalFillet, InclusiveLimitGivesFourteenBondsInside) {
   FilletGeneratorOptions options;
-  options.bond_limit = BondLimit::inclusive;
+  options.bond_limit = BondLimit::kInclusive;
   const auto fillet = generate_fillet_template(*mesh_, "inclusive", options);
   EXPECT_EQ(fillet.positions_m.size(), fillet_->positions_m.size());
   expect_bonds_valid(fillet, 0.004 * std::sqrt(3.0), true);
@@ -342,7 +342,7 @@ TEST_F(NominalFillet, InclusiveLimitGivesFourteenBondsInside) {
 
 TEST_F(NominalFillet, SphereInsideKeepsEverySphereInside) {
   FilletGeneratorOptions options;
-  options.inclusion = RasterInclusion::sphere_inside;
+  options.inclusion = RasterInclusion::kSphereInside;
   const auto fillet = generate_fillet_template(*mesh_, "inside", options);
   for (const auto& p : fillet.positions_m) {
     const Eigen::Vector3d centre = p + fillet.centroid_in_mesh_m;
@@ -413,7 +413,7 @@ TEST(FilletGenerator, CountsPerVariantAndRadius) {
   // r = 4 mm; the bond count per sphere below 3 (6 per interior sphere, shared by 2).
   const auto base = make_fillet_mesh();
   for (const auto& variant : thesis_fillet_variants()) {
-    if (variant.side == FilletSide::right) continue;  // mirror images, same counts
+    if (variant.side == FilletSide::kRight) continue;  // mirror images, same counts
     const auto mesh = make_variant_mesh(base, variant);
     const auto fillet = generate_fillet_template(mesh, variant.name);
     const double count = static_cast<double>(fillet.positions_m.size());

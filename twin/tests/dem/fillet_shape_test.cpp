@@ -145,7 +145,7 @@ TEST(FilletShape, SixVariantsHaveTable31BoxesAndNames) {
   for (std::size_t n = 0; n < variants.size(); ++n) {
     const auto& variant = variants[n];
     EXPECT_EQ(variant.name, names[n]);
-    EXPECT_EQ(variant.side, n % 2 == 0 ? FilletSide::left : FilletSide::right);
+    EXPECT_EQ(variant.side, n % 2 == 0 ? FilletSide::kLeft : FilletSide::kRight);
     const auto mesh = make_variant_mesh(base, variant);
     EXPECT_TRUE(is_closed_outward(mesh)) << variant.name;
     const auto size = bounding_box(mesh).size();
@@ -193,7 +193,7 @@ TEST(FilletShape, PointInMeshOnKnownPoints) {
 TEST(FilletShape, AssetEqualsProceduralMesh) {
   const auto mesh = make_fillet_mesh();
   if (std::getenv("FL_REGENERATE_ASSETS") != nullptr) {
-    write_stl(kAsset, mesh, StlWriteOptions{StlFormat::binary, 1e3, "fillet_nominal mm"});
+    write_stl(kAsset, mesh, StlWriteOptions{StlFormat::kBinary, 1e3, "fillet_nominal mm"});
   }
   StlReadOptions millimetres;
   millimetres.scale = 1e-3;

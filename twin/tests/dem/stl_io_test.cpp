@@ -61,7 +61,7 @@ StlError expect_stl_error(Parse parse, StlErrorKind kind) {
 }
 
 std::string binary_of(const TriangleMesh& mesh) {
-  return format_stl(mesh, StlWriteOptions{StlFormat::binary, 1.0, "t"});
+  return format_stl(mesh, StlWriteOptions{StlFormat::kBinary, 1.0, "t"});
 }
 
 const std::string kAsciiTriangleFacet =
@@ -74,7 +74,7 @@ TEST(StlIo, BinaryRoundTripIsBitExact) {
   const auto bytes = binary_of(mesh);
   EXPECT_EQ(bytes.size(), 84U + 50U * mesh.triangles.size());
   const auto read = parse_stl(bytes, "memory");
-  EXPECT_EQ(read.format, StlFormat::binary);
+  EXPECT_EQ(read.format, StlFormat::kBinary);
   EXPECT_EQ(read.facets_in_file, mesh.triangles.size());
   EXPECT_EQ(read.degenerate_facets_dropped, 0U);
   expect_same_facets(mesh, read.mesh);
@@ -84,9 +84,9 @@ TEST(StlIo, BinaryRoundTripIsBitExact) {
 TEST(StlIo, AsciiRoundTripIsBitExactForDoubles) {
   // Shortest round-trip decimal output: doubles survive without the float32 rounding.
   const auto mesh = make_icosphere(0.0371, 3);
-  const auto text = format_stl(mesh, StlWriteOptions{StlFormat::ascii, 1.0, "ico sphere"});
+  const auto text = format_stl(mesh, StlWriteOptions{StlFormat::kAscii, 1.0, "ico sphere"});
   const auto read = parse_stl(text, "memory");
-  EXPECT_EQ(read.format, StlFormat::ascii);
+  EXPECT_EQ(read.format, StlFormat::kAscii);
   EXPECT_EQ(read.solid_name, "ico sphere");
   expect_same_facets(mesh, read.mesh);
 }
@@ -96,7 +96,7 @@ TEST(StlIo, FileRoundTripWithUnitScaling) {
   // Metres written as millimetres and read back as metres. 250 mm is exact in float32; the
   // factor 1e-3 is not exact in binary, so metres come back within a few ulp.
   const auto box = make_box(Eigen::Vector3d::Zero(), Eigen::Vector3d(0.25, 0.5, 0.125));
-  write_stl(path, box, StlWriteOptions{StlFormat::binary, 1e3, "box"});
+  write_stl(path, box, StlWriteOptions{StlFormat::kBinary, 1e3, "box"});
   const auto in_mm = read_stl(path);
   EXPECT_DOUBLE_EQ(bounding_box(in_mm.mesh).max.x(), 250.0);
   EXPECT_EQ(in_mm.solid_name, "fl binary STL box");
@@ -112,7 +112,7 @@ TEST(StlIo, WeldingJoinsCornersWithinTolerance) {
   // A cube written as ASCII with one corner copy displaced by 1e-7 (< default 1e-6): still
   // closed after welding, and the first-seen coordinates are kept.
   auto text = format_stl(make_box(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()),
-                         StlWriteOptions{StlFormat::ascii, 1.0, "cube"});
+                         StlWriteOptions{StlFormat::kAscii, 1.0, "cube"});
   const auto last_vertex = text.rfind("vertex 1 1 1");
   ASSERT_NE(last_vertex, std::string::npos);
   text.replace(last_vertex, 12, "vertex 1.0000001 1 1");
@@ -125,7 +125,7 @@ TEST(StlIo, WeldingJoinsCornersWithinTolerance) {
   StlReadOptions strict;
   strict.weld_tolerance = 1e-8;
   const auto error =
-      expect_stl_error([&] { parse_stl(text, "cube.stl", strict); }, StlErrorKind::not_closed);
+      expect_stl_error([&] { parse_stl(text, "cube.stl", strict); }, StlErrorKind::kNotClosed);
   EXPECT_NE(std::string(error.what()).find("cube.stl: the mesh is not closed"), std::string::npos)
       << error.what();
   EXPECT_NE(std::string(error.what()).find("boundary edges"), std::string::npos) << error.what();
@@ -137,19 +137,19 @@ TEST(StlIo, SolidHeaderBinaryIsReadAsBinary) {
   // Some exporters start binary headers with "solid"; the exact size decides.
   auto bytes = binary_of(make_box(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()));
   std::memcpy(bytes.data(), "solid exported", 14);
-  EXPECT_EQ(parse_stl(bytes, "memory").format, StlFormat::binary);
+  EXPECT_EQ(parse_stl(bytes, "memory").format, StlFormat::kBinary);
 }
 
 TEST(StlIo, TruncatedBinaryIsRefused) {
   const auto bytes = binary_of(make_box(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()));
   // 12 facets = 684 bytes; cut inside the last facet.
   const auto error = expect_stl_error(
-      [&] { parse_stl(bytes.substr(0, bytes.size() - 7), "cube.stl"); }, StlErrorKind::truncated);
+      [&] { parse_stl(bytes.substr(0, bytes.size() - 7), "cube.stl"); }, StlErrorKind::kTruncated);
   EXPECT_STREQ(error.what(),
                "cube.stl: truncated binary STL: the header says 12 facets (684 bytes) but the "
                "file has 677 bytes");
   const auto short_error = expect_stl_error([&] { parse_stl(bytes.substr(0, 50), "cube.stl"); },
-                                            StlErrorKind::truncated);
+                                            StlErrorKind::kTruncated);
   EXPECT_STREQ(short_error.what(),
                "cube.stl: truncated binary STL: the file has 50 bytes, the 80-byte header and "
                "facet count need 84");
@@ -159,13 +159,13 @@ TEST(StlIo, FacetCountNotMatchingSizeIsRefused) {
   auto bytes = binary_of(make_box(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()));
   bytes[80] = 10;  // header claims 10 facets, the file holds 12
   const auto error =
-      expect_stl_error([&] { parse_stl(bytes, "cube.stl"); }, StlErrorKind::size_mismatch);
+      expect_stl_error([&] { parse_stl(bytes, "cube.stl"); }, StlErrorKind::kSizeMismatch);
   EXPECT_STREQ(error.what(),
                "cube.stl: binary STL size mismatch: the header says 10 facets (584 bytes) but "
                "the file has 684 bytes");
   // An absurd count (4 billion facets) is a size problem, not an allocation.
   bytes[80] = bytes[81] = bytes[82] = bytes[83] = static_cast<char>(0xFF);
-  expect_stl_error([&] { parse_stl(bytes, "cube.stl"); }, StlErrorKind::truncated);
+  expect_stl_error([&] { parse_stl(bytes, "cube.stl"); }, StlErrorKind::kTruncated);
 }
 
 TEST(StlIo, NanInBinaryIsRefused) {
@@ -174,7 +174,7 @@ TEST(StlIo, NanInBinaryIsRefused) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::memcpy(bytes.data() + 84 + 100 + 12 + 12 + 4, &nan, 4);
   const auto error =
-      expect_stl_error([&] { parse_stl(bytes, "cube.stl"); }, StlErrorKind::non_finite);
+      expect_stl_error([&] { parse_stl(bytes, "cube.stl"); }, StlErrorKind::kNonFinite);
   EXPECT_STREQ(error.what(), "cube.stl: facet 2 corner 1 has a NaN coordinate");
 }
 
@@ -182,11 +182,11 @@ TEST(StlIo, NanAndInfinityInAsciiAreRefusedWithLine) {
   auto text = "solid t\n" + kAsciiTriangleFacet + "endsolid t\n";
   auto with_nan = text;
   with_nan.replace(with_nan.find("vertex 1 0 0"), 12, "vertex 1 nan 0");
-  auto error = expect_stl_error([&] { parse_stl(with_nan, "t.stl"); }, StlErrorKind::non_finite);
+  auto error = expect_stl_error([&] { parse_stl(with_nan, "t.stl"); }, StlErrorKind::kNonFinite);
   EXPECT_STREQ(error.what(), "t.stl: line 5: vertex coordinate is NaN");
   auto with_inf = text;
   with_inf.replace(with_inf.find("vertex 0 1 0"), 12, "vertex 0 1 -inf");
-  error = expect_stl_error([&] { parse_stl(with_inf, "t.stl"); }, StlErrorKind::non_finite);
+  error = expect_stl_error([&] { parse_stl(with_inf, "t.stl"); }, StlErrorKind::kNonFinite);
   EXPECT_STREQ(error.what(), "t.stl: line 6: vertex coordinate is -infinity");
 }
 
@@ -215,27 +215,27 @@ TEST(StlIo, AsciiSyntaxErrorsNameTheLine) {
       {head + "  outer loop\n", "t.stl: line 2: expected 'facet' or 'endsolid' but found 'outer'"},
   };
   for (const auto& c : cases) {
-    const auto error = expect_stl_error([&] { parse_stl(c.text, "t.stl"); }, StlErrorKind::syntax);
+    const auto error = expect_stl_error([&] { parse_stl(c.text, "t.stl"); }, StlErrorKind::kSyntax);
     EXPECT_EQ(std::string(error.what()), c.message);
   }
 }
 
 TEST(StlIo, EmptyAndFacetlessAndMissingFilesAreRefused) {
-  auto error = expect_stl_error([&] { parse_stl("", "e.stl"); }, StlErrorKind::empty);
+  auto error = expect_stl_error([&] { parse_stl("", "e.stl"); }, StlErrorKind::kEmpty);
   EXPECT_STREQ(error.what(), "e.stl: the file is empty");
   error =
-      expect_stl_error([&] { parse_stl("solid x\nendsolid x\n", "e.stl"); }, StlErrorKind::empty);
+      expect_stl_error([&] { parse_stl("solid x\nendsolid x\n", "e.stl"); }, StlErrorKind::kEmpty);
   EXPECT_STREQ(error.what(), "e.stl: the file holds no facets");
   const auto missing = std::filesystem::temp_directory_path() / "fl_no_such_file.stl";
-  error = expect_stl_error([&] { read_stl(missing); }, StlErrorKind::cannot_open);
+  error = expect_stl_error([&] { read_stl(missing); }, StlErrorKind::kCannotOpen);
   EXPECT_EQ(std::string(error.what()), missing.string() + ": no such file");
   // Text that is not ASCII STL is taken for binary; "xxxx" as a facet count is far too many.
-  expect_stl_error([&] { parse_stl(std::string(100, 'x'), "x.stl"); }, StlErrorKind::truncated);
+  expect_stl_error([&] { parse_stl(std::string(100, 'x'), "x.stl"); }, StlErrorKind::kTruncated);
 }
 
 TEST(StlIo, OpenAsciiMeshIsRefusedWhenClosedIsRequired) {
   const auto text = "solid t\n" + kAsciiTriangleFacet + "endsolid t\n";
-  const auto error = expect_stl_error([&] { parse_stl(text, "t.stl"); }, StlErrorKind::not_closed);
+  const auto error = expect_stl_error([&] { parse_stl(text, "t.stl"); }, StlErrorKind::kNotClosed);
   EXPECT_STREQ(error.what(),
                "t.stl: the mesh is not closed after welding corners within 1e-06: 3 boundary "
                "edges");
@@ -261,7 +261,7 @@ TEST(StlIo, RandomGarbageNeverCrashes) {
   // Deterministic pseudo-random bytes and mutated valid files: every outcome is a mesh or an
   // StlError, nothing else.
   const auto valid_ascii = format_stl(make_box(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()),
-                                      StlWriteOptions{StlFormat::ascii, 1.0, "cube"});
+                                      StlWriteOptions{StlFormat::kAscii, 1.0, "cube"});
   const auto valid_binary = binary_of(make_box(Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()));
   std::uint32_t state = 12345;
   auto next = [&] {

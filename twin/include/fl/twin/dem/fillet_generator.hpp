@@ -56,14 +56,14 @@ struct FilletShapeParams {
 TriangleMesh make_fillet_mesh(const FilletShapeParams& params = {});
 
 // Left fillets are the base shape (straighter edge at -y), right fillets its mirror y -> -y.
-enum class FilletSide { left, right };
+enum class FilletSide { kLeft, kRight };
 
 struct FilletVariant {
   std::string name;  // "s144x72x40_left"
   double length_m = 0.0;
   double width_m = 0.0;
   double thickness_m = 0.0;
-  FilletSide side = FilletSide::left;
+  FilletSide side = FilletSide::kLeft;
 };
 
 // Table 3.1 sizes (144x72x40, 172x72x32, 176x72x40 mm), each left and right, in that order.
@@ -81,10 +81,10 @@ enum class RasterInclusion {
   // Centre inside the mesh (the default, as the thesis' "simple raster"): the spheres'
   // lattice cells tile the mesh volume on average, so the count is close to volume / pitch^3,
   // and spheres stick out of the surface by up to one radius.
-  centre_inside,
+  kCentreInside,
   // The whole sphere inside the mesh, up to `sphere_protrusion_m`: the shape shrinks by about
   // one radius all round, which for 4 mm spheres in a 32 mm fillet loses about half of them.
-  sphere_inside,
+  kSphereInside,
 };
 
 // Whether a pair exactly at the bond limit (distance == 2 x contact radius) is bonded.
@@ -95,10 +95,10 @@ enum class BondLimit {
   // sphere has 6 bonds, to its face neighbours. This is the thesis' intent: R x sqrt(3) is
   // the largest contact radius that does not yet add the diagonal "truss" bonds (figures 3.4
   // and 3.5), and table B.1's 6.928 mm is 4 x sqrt(3) = 6.9282 mm rounded down.
-  exclusive,
+  kExclusive,
   // Also bond pairs at the limit (distance <= 2 x contact radius, plus a relative 1e-9): at
   // r x sqrt(3) the 8 body diagonals join the 6 face neighbours, 14 bonds per interior sphere.
-  inclusive,
+  kInclusive,
 };
 
 struct FilletGeneratorOptions {
@@ -106,9 +106,9 @@ struct FilletGeneratorOptions {
   double sub_particle_radius_m = 0.004;
   // Contact radius = factor x radius; sqrt(3) is the two-type limit (6.928 mm at 4 mm).
   double contact_radius_factor = std::sqrt(3.0);
-  BondLimit bond_limit = BondLimit::exclusive;
-  RasterInclusion inclusion = RasterInclusion::centre_inside;
-  double sphere_protrusion_m = 0.0;  // only for RasterInclusion::sphere_inside
+  BondLimit bond_limit = BondLimit::kExclusive;
+  RasterInclusion inclusion = RasterInclusion::kCentreInside;
+  double sphere_protrusion_m = 0.0;  // only for RasterInclusion::kSphereInside
   double density_kg_m3 = 940.0;      // thesis table B.1
   // The spheres fill pi/6 = 52 % of their raster cells, so spheres of the material density
   // weigh about half the mesh volume x density. Set to scale the particle density so the

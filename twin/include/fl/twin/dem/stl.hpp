@@ -22,17 +22,17 @@
 
 namespace fl::dem {
 
-enum class StlFormat { binary, ascii };
+enum class StlFormat { kBinary, kAscii };
 
 enum class StlErrorKind {
-  cannot_open,    // missing or unreadable file
-  truncated,      // binary file shorter than its header's facet count needs
-  size_mismatch,  // binary file longer than its facet count needs (or count absurd)
-  non_finite,     // NaN or infinite coordinate
-  syntax,         // ASCII grammar error (the message carries the line number)
-  empty,          // no facets
-  not_closed,     // closed mesh required but the welded mesh is not a closed 2-manifold
-  cannot_write,   // output file could not be written
+  kCannotOpen,    // missing or unreadable file
+  kTruncated,     // binary file shorter than its header's facet count needs
+  kSizeMismatch,  // binary file longer than its facet count needs (or count absurd)
+  kNonFinite,     // NaN or infinite coordinate
+  kSyntax,        // ASCII grammar error (the message carries the line number)
+  kEmpty,         // no facets
+  kNotClosed,     // closed mesh required but the welded mesh is not a closed 2-manifold
+  kCannotWrite,   // output file could not be written
 };
 
 class StlError : public std::runtime_error {
@@ -48,7 +48,7 @@ struct StlReadOptions {
   // Corners closer than this (in file units, before `scale`) become one vertex. The first
   // corner seen keeps its exact coordinates, so welding never moves a vertex.
   double weld_tolerance = 1e-6;
-  // Refuse meshes that are not closed 2-manifolds after welding (StlErrorKind::not_closed).
+  // Refuse meshes that are not closed 2-manifolds after welding (StlErrorKind::kNotClosed).
   bool require_closed = true;
   // Coordinates are multiplied by this after welding (1e-3: millimetre file -> metres).
   double scale = 1.0;
@@ -56,7 +56,7 @@ struct StlReadOptions {
 
 struct StlReadResult {
   TriangleMesh mesh;
-  StlFormat format = StlFormat::binary;
+  StlFormat format = StlFormat::kBinary;
   std::string solid_name;  // ASCII "solid <name>" or the binary header's printable text
   std::size_t facets_in_file = 0;
   // Facets whose corners welded together (zero area at the tolerance); they are dropped.
@@ -64,7 +64,7 @@ struct StlReadResult {
 };
 
 struct StlWriteOptions {
-  StlFormat format = StlFormat::binary;
+  StlFormat format = StlFormat::kBinary;
   // Coordinates are multiplied by this before writing (1e3: metres -> millimetre file).
   double scale = 1.0;
   std::string solid_name = "mesh";
