@@ -27,6 +27,7 @@ namespace fs = std::filesystem;
 inline pid_t spawn(const std::vector<std::string>& args, const fs::path& log,
                    const std::vector<std::string>& environment = {}) {
   std::vector<char*> argv;
+  argv.reserve(args.size() + 1);
   for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
   argv.push_back(nullptr);
   std::vector<char*> envp;

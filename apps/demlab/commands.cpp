@@ -242,8 +242,9 @@ Summary run_bend(const Context& context) {
   }
   table.write(out(context, "bend.csv"));
   CsvTable series({"time_s", "bend_angle_deg", "tip_x_m", "tip_z_m"});
-  for (const auto& s : nominal.series)
+  for (const auto& s : nominal.series) {
     series.add_row({s.time_s, s.angle_deg, s.tip_x_m, s.tip_z_m});
+  }
   series.write(out(context, "bend_series.csv"));
   Plot plot;
   plot.title =

@@ -283,6 +283,7 @@ int calibrate_command(const CalibrateArgs& args) {
   std::ofstream(out / "calibration.json") << calibration_json(result) << "\n";
   {
     std::vector<std::string> header;
+    header.reserve(parameters.size());
     for (const CalibratedParameter& p : parameters) header.push_back(p.address);
     header.emplace_back("rmse_si");
     std::ofstream design(out / "design.csv");

@@ -37,8 +37,9 @@ void DemRunOutput::on_scan(std::int64_t time_ns) {
   const dem::Simulation& simulation = plant_.simulation();
   const BulkScene* bulk = plant_.bulk_end();
   if (vtk_) vtk_->write(simulation);
-  if (bulk_vtk_ && bulk != nullptr)
+  if (bulk_vtk_ && bulk != nullptr) {
     bulk_vtk_->write(bulk->simulation(), plant_.bulk_end_offset_m());
+  }
   if (!video_file_.empty()) {
     cv::Mat frame = render::render_dem_scene(simulation, view_);
     if (bulk != nullptr) {

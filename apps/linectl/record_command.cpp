@@ -185,8 +185,9 @@ int record_twin(const RecordArgs& args, double duration_s) {
     writer.add_camera(camera, calibration);
   }
   std::string camera_list;
-  for (const std::string& name : args.cameras)
+  for (const std::string& name : args.cameras) {
     camera_list += (camera_list.empty() ? "" : ", ") + name;
+  }
   spdlog::info("recording the {} plant (seed {}) for {} s into {}: frames of {} at {} x {} px",
                plant->name(), args.seed, duration_s, args.out, camera_list, args.width_px,
                args.height_px);

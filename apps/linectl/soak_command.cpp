@@ -362,8 +362,9 @@ int soak_command(const SoakArgs& args) {
       static_cast<unsigned long long>(verdict.late_scans),
       static_cast<unsigned long long>(verdict.overruns),
       static_cast<unsigned long long>(verdict.lost_fillets));
-  for (const std::string& failure : verdict.failures)
+  for (const std::string& failure : verdict.failures) {
     std::printf("  failed: %s\n", failure.c_str());
+  }
   if (!verdict.deadline_diagnosis.empty()) {
     std::printf("  late scans: %s\n", verdict.deadline_diagnosis.c_str());
   }

@@ -317,7 +317,8 @@ int vision_eval_command(const VisionEvalArgs& args) {
                                AccuracyTally(tally_options)};
       vision::FilletEstimator estimator(*recorded.calibration, params);
       std::size_t frames_without_truth = 0;
-      for (const auto& [sequence, frame] : recorded.frames) {
+      for (const auto& [frame_sequence, frame] : recorded.frames) {
+        const auto sequence = frame_sequence;  // the lambda below captures it (clang 14)
         const auto truth = recorded.truth.find(sequence);
         if (truth == recorded.truth.end()) {
           ++frames_without_truth;

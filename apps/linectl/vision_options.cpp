@@ -21,8 +21,9 @@ std::optional<CameraId> camera_option(const std::string& name) {
 std::optional<vision::EstimatorParams> estimator_options(const std::vector<std::string>& settings) {
   vision::EstimatorParams params;
   try {
-    for (const std::string& setting : settings)
+    for (const std::string& setting : settings) {
       vision::record::set_estimator_param(params, setting);
+    }
   } catch (const std::invalid_argument& error) {
     spdlog::error("--set: {}", error.what());
     return std::nullopt;
@@ -34,8 +35,9 @@ std::unique_ptr<vision::record::FrameSource> open_camera_frames(const std::strin
                                                                 const std::string& video_file,
                                                                 int device,
                                                                 std::int64_t period_ns) {
-  if (!images_dir.empty())
+  if (!images_dir.empty()) {
     return std::make_unique<vision::record::DirectoryFrameSource>(images_dir, period_ns);
+  }
   if (!video_file.empty()) {
     return std::make_unique<vision::record::VideoCaptureFrameSource>(video_file, period_ns);
   }

@@ -440,11 +440,14 @@ void CanopenIo::fill_image(InputImage& in) const {
   if (infeed_ok) {
     in.takt_beam_broken = (infeed.digital_inputs & infeed_io::kBeamBrokenBit) != 0;
     in.leveller_overload = (infeed.digital_inputs & infeed_io::kLevellerOverloadBit) != 0;
-    in.level_mm = infeed.analog_inputs[infeed_io::kLevelChannel] * scaling.level_mm_per_count;
-    in.hopper_opening_mm = infeed.analog_inputs[infeed_io::kHopperOpeningChannel] *
-                           scaling.hopper_opening_mm_per_count;
+    in.level_mm = static_cast<float>(infeed.analog_inputs[infeed_io::kLevelChannel]) *
+                  scaling.level_mm_per_count;
+    in.hopper_opening_mm =
+        static_cast<float>(infeed.analog_inputs[infeed_io::kHopperOpeningChannel]) *
+        scaling.hopper_opening_mm_per_count;
     in.leveller_speed_rpm =
-        infeed.analog_inputs[infeed_io::kLevellerSpeedChannel] * scaling.leveller_rpm_per_count;
+        static_cast<float>(infeed.analog_inputs[infeed_io::kLevellerSpeedChannel]) *
+        scaling.leveller_rpm_per_count;
   } else {
     in.takt_beam_broken = false;
     in.leveller_overload = true;  // the leveller's own fault path stops the infeed
@@ -456,8 +459,9 @@ void CanopenIo::fill_image(InputImage& in) const {
     in.flip_plate1_flipping = (stations.digital_inputs & stations_io::kPlate1FlippingBit) != 0;
     in.flip_plate2_flipping = (stations.digital_inputs & stations_io::kPlate2FlippingBit) != 0;
     in.squeeze_roller_down = (stations.digital_inputs & stations_io::kSqueezeDownBit) != 0;
-    in.centring_position_mm = stations.analog_inputs[stations_io::kCentringPositionChannel] *
-                              scaling.centring_mm_per_count;
+    in.centring_position_mm =
+        static_cast<float>(stations.analog_inputs[stations_io::kCentringPositionChannel]) *
+        scaling.centring_mm_per_count;
   }  // else: the last values stay; estop_ok below stops the line
   const bool all_io_ok = infeed_ok && stations_ok && safety_ok;
   in.estop_ok = all_io_ok && (safety.digital_inputs & safety_io::kEstopChainClosedBit) != 0;

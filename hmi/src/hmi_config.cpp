@@ -62,7 +62,7 @@ HmiConfig load_hmi_config(const std::filesystem::path& file) {
 }
 
 std::filesystem::path default_document_root() {
-  const std::filesystem::path source = FL_HMI_SOURCE_WWW;
+  std::filesystem::path source = FL_HMI_SOURCE_WWW;
   if (std::filesystem::is_regular_file(source / "index.html")) return source;
   return FL_HMI_INSTALLED_WWW;
 }

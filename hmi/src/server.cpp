@@ -142,7 +142,7 @@ struct HmiServer::Impl {
 
   std::jthread broadcaster;
 
-  Impl(HmiConfig config_in, TripleBuffer<LineStatus>& status_in, nlohmann::json layout,
+  Impl(HmiConfig config_in, TripleBuffer<LineStatus>& status_in, const nlohmann::json& layout,
        HmiCommands commands_in, ClockNs clock_in)
       : config(std::move(config_in)),
         status(status_in),

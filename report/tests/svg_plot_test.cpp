@@ -34,8 +34,9 @@ std::string xml_problem(const std::string& xml) {
     if (tag.find('<') != std::string::npos) return "'<' inside a tag at " + std::to_string(k);
     if (tag[0] == '?' || tag[0] == '!') {
     } else if (tag[0] == '/') {
-      if (open.empty() || open.back() != tag.substr(1))
+      if (open.empty() || open.back() != tag.substr(1)) {
         return "mismatched </" + tag.substr(1) + ">";
+      }
       open.pop_back();
     } else if (tag.back() != '/') {
       open.push_back(tag.substr(0, tag.find_first_of(" \n")));

@@ -62,13 +62,18 @@ inline std::unique_ptr<Simulation> make_bed(int nx, int ny, int nz, int threads,
   auto sim = std::make_unique<Simulation>(std::make_shared<Model>(spec));
   std::mt19937 random(32452843);
   std::uniform_real_distribution<double> jitter(-0.0006, 0.0006);
-  sim->reserve(static_cast<std::size_t>(nx * ny * nz), 0);
-  for (int z = 0; z < nz; ++z)
-    for (int y = 0; y < ny; ++y)
-      for (int x = 0; x < nx; ++x)
+  sim->reserve(
+      static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz),
+      0);
+  for (int z = 0; z < nz; ++z) {
+    for (int y = 0; y < ny; ++y) {
+      for (int x = 0; x < nx; ++x) {
         sim->add_sphere(
             {Vec3((x + 0.5) * a + jitter(random), (y + 0.5) * a + jitter(random), (z + 0.5) * a),
              kRadius, 0});
+      }
+    }
+  }
   sim->wall("belt").surface_velocity_m_per_s = Vec3(0.3, 0, 0);
   sim->step(static_cast<std::size_t>(settle_steps));
   return sim;
@@ -93,25 +98,31 @@ inline std::unique_ptr<Simulation> make_fillets(int fillets, int threads, bool w
   spec.planes = {{"belt", 1, Vec3::Zero(), Vec3::UnitZ()}};
   auto sim = std::make_unique<Simulation>(std::make_shared<Model>(spec));
   std::vector<Vec3> block;
-  for (int k = 0; k < 5; ++k)
-    for (int j = 0; j < 7; ++j)
+  for (int k = 0; k < 5; ++k) {
+    for (int j = 0; j < 7; ++j) {
       for (int i = 0; i < 10; ++i) block.emplace_back(i * a, j * a, k * a);
+    }
+  }
   std::vector<double> radii(block.size(), kRadius);
   std::vector<std::uint8_t> types(block.size(), 0);
   std::vector<BodyBond> bonds;
-  for (std::uint32_t p = 0; p < block.size(); ++p)
-    for (std::uint32_t q = p + 1; q < block.size(); ++q)
+  for (std::uint32_t p = 0; p < block.size(); ++p) {
+    for (std::uint32_t q = p + 1; q < block.size(); ++q) {
       if ((block[p] - block[q]).norm() < a * std::sqrt(3.0) * 1.001) bonds.push_back({p, q, a});
+    }
+  }
   sim->reserve(block.size() * static_cast<std::size_t>(fillets),
                bonds.size() * static_cast<std::size_t>(fillets));
-  for (int layer = 0; layer < 2; ++layer)
-    for (int p = 0; p < fx; ++p)
+  for (int layer = 0; layer < 2; ++layer) {
+    for (int p = 0; p < fx; ++p) {
       for (int q = 0; q < fy; ++q) {
         BodyPose pose;
         pose.position_m =
             Vec3(a + p * px + layer * 7 * a, a + q * py + layer * 6 * a, 0.625 * a + layer * pz);
         sim->add_body(block, radii, types, bonds, pose);
       }
+    }
+  }
   sim->wall("belt").surface_velocity_m_per_s = Vec3(0.3, 0, 0);
   sim->step(static_cast<std::size_t>(settle_steps));
   return sim;

@@ -312,8 +312,9 @@ std::vector<ParameterSensitivity> sensitivities(const Evaluator& evaluator,
     rss_up[p] = rss(moved_rmse[2 * p + 1]);
   }
   std::vector<double> rss_pairs;
-  for (std::size_t k = 2 * dimensions; k < moves.size(); ++k)
+  for (std::size_t k = 2 * dimensions; k < moves.size(); ++k) {
     rss_pairs.push_back(rss(moved_rmse[k]));
+  }
   const detail::JointIntervals joint =
       detail::joint_intervals(detail::curvature_matrix(rss_down, rss_up, rss_pairs, sign,
                                                        rss(result.rmse), kSensitivityStep),

@@ -335,8 +335,9 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
       values[c] = value_si;
     }
     if (!row_ok) continue;
-    for (std::size_t c = 0; c < columns.size(); ++c)
+    for (std::size_t c = 0; c < columns.size(); ++c) {
       table.channels[c].values_si.push_back(values[c]);
+    }
     table.lines.push_back(row.line);
   }
   if (rows.size() == 1) problems.add(header.line, 0, "a header but no data rows");
@@ -439,6 +440,7 @@ std::optional<ExperimentType> experiment_from_string(std::string_view name) {
 const ExperimentSchema& schema_of(ExperimentType type) {
   static const std::vector<ExperimentSchema> schemas = [] {
     std::vector<ExperimentSchema> all;
+    all.reserve(kExperimentNames.size());
     for (const auto& entry : kExperimentNames) all.push_back(make_schema(entry.first));
     return all;
   }();
@@ -507,6 +509,7 @@ Dataset load_dataset(const std::filesystem::path& folder) {
       schema = &schema_of(*type);
     } else if (reader.all_read_ok({"experiment"})) {
       std::vector<std::string_view> names;
+      names.reserve(kExperimentNames.size());
       for (const auto& entry : kExperimentNames) names.push_back(entry.second);
       root.report("experiment", ProblemKind::kInvalidValue,
                   "'" + experiment + "' is not one of " + join(names));

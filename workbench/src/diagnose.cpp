@@ -242,6 +242,7 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   std::vector<std::thread> threads;
   const int thread_count =
       std::clamp(options.threads, 1, static_cast<int>(std::max<std::size_t>(candidates.size(), 1)));
+  threads.reserve(static_cast<std::size_t>(thread_count));
   for (int t = 0; t < thread_count; ++t) threads.emplace_back(worker);
   for (std::thread& thread : threads) thread.join();
 

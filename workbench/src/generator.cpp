@@ -107,6 +107,7 @@ const std::vector<EffectRange>& effects_of(ExperimentType type) {
 
 std::vector<std::string> names_of(const std::vector<EffectRange>& effects) {
   std::vector<std::string> names;
+  names.reserve(effects.size());
   for (const EffectRange& effect : effects) names.emplace_back(effect.law);
   return names;
 }
@@ -304,8 +305,9 @@ dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& 
   for (dem::InteractionSpec& interaction : spec.interactions) {
     if (!interaction.bond_law) continue;
     interaction.bond_law->name = effect.law;
-    for (const auto& [key, value] : effect.parameters)
+    for (const auto& [key, value] : effect.parameters) {
       interaction.bond_law->parameters[key] = value;
+    }
   }
   return spec;
 }
@@ -372,8 +374,9 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
   }
 
   model_tests::CommonParams truth_common = options.common;
-  if (truth_common.base_spec.materials.empty())
+  if (truth_common.base_spec.materials.empty()) {
     truth_common.base_spec = dem::appendix_b_model_spec();
+  }
   truth_common.base_spec =
       with_experiment_effect(truth_common.base_spec, options.experiment, made.truth);
   const std::unique_ptr<TrialModel> truth = make_twin_model(options.experiment, truth_common);
@@ -422,8 +425,9 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
         for (const auto& [column, distribution] : noisy) {
           std::vector<double>& values = trial.data.channels[column].values_si;
           for (std::size_t row = 0; row < values.size(); ++row) {
-            if (first_row(row) && distribution->stddev() > 0.0)
+            if (first_row(row) && distribution->stddev() > 0.0) {
               values[row] += (*distribution)(random);
+            }
           }
         }
       }
@@ -520,8 +524,9 @@ void write_truth(const HiddenEffect& truth, const std::filesystem::path& file) {
   out << "# The hidden effect of a generated dataset: for checking a diagnosis, not for it.\n"
       << "effect: " << (truth.law.empty() ? "none" : truth.law) << "\nparameters:\n";
   if (truth.parameters.empty()) out << "  {}\n";
-  for (const auto& [key, value] : truth.parameters)
+  for (const auto& [key, value] : truth.parameters) {
     out << "  " << key << ": " << report::format_double(value) << "\n";
+  }
   if (!out) throw std::runtime_error("cannot write " + file.string());
 }
 

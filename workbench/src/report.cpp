@@ -65,8 +65,9 @@ std::string report_json(const CompareReport& report) {
       t["channels"][c.channel] = {{"unit", std::string(c.unit.symbol)},
                                   {"measured_si", c.measured_si},
                                   {"model_si", c.model_si}};
-      if (!c.model_spread_si.empty())
+      if (!c.model_spread_si.empty()) {
         t["channels"][c.channel]["model_spread_si"] = c.model_spread_si;
+      }
     }
     traces.push_back(t);
   }
@@ -88,8 +89,9 @@ std::string report_html(const CompareReport& report) {
        << "</b>; model: " << report::xml_escape(report.model) << "</p>\n";
   if (!report.failed_trials.empty()) {
     html << "<p><b>Trials not run:</b></p><ul>";
-    for (const std::string& failure : report.failed_trials)
+    for (const std::string& failure : report.failed_trials) {
       html << "<li>" << report::xml_escape(failure);
+    }
     html << "</ul>\n";
   }
   html << "<h2>Where it fails</h2>\n<p>Error per channel and group, worst first. Score: RMS "

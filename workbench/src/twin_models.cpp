@@ -27,7 +27,7 @@ int spheres_along(const Conditions& conditions, std::string_view name, double ra
 }
 
 std::string label_condition(const Conditions& conditions, std::string_view name,
-                            std::string fallback) {
+                            const std::string& fallback) {
   const auto found = conditions.find(name);
   return found == conditions.end() ? fallback : std::get<std::string>(found->second);
 }
@@ -337,13 +337,16 @@ Table TwinBulkFlowModel::run(const Dataset& dataset, const Trial& trial) {
   if (feed != trial.conditions.end()) config.feeder.rate_per_s = std::get<double>(feed->second);
   const std::vector<double>& opening_m = trial.data.at("opening").values_si;
   std::vector<double> openings_mm;
+  openings_mm.reserve(opening_m.size());
   for (const double opening : opening_m) openings_mm.push_back(opening * 1e3);
   // The sweep refuses an opening beyond the gate's travel, naming it.
   const std::vector<GateSweepPoint> points = sweep_gate_opening(
       config, openings_mm, GateSweepOptions{settings_.settle_s, settings_.measure_s});
   std::vector<double> outflow_kg_per_s;
-  for (const GateSweepPoint& point : points)
+  outflow_kg_per_s.reserve(points.size());
+  for (const GateSweepPoint& point : points) {
     outflow_kg_per_s.push_back(point.gate_mass_flow_kg_per_s);
+  }
   return single_channel_answer(trial, "outflow", std::move(outflow_kg_per_s));
 }
 

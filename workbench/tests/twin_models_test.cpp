@@ -34,7 +34,7 @@ Trial profile_trial(const std::string& id) {
 }
 
 model_tests::CommonParams common_with_bond_law(const std::string& law,
-                                               dem::LawParameters extra = {}) {
+                                               const dem::LawParameters& extra = {}) {
   model_tests::CommonParams common = test::base_model();
   for (dem::InteractionSpec& interaction : common.base_spec.interactions) {
     if (!interaction.bond_law) continue;

@@ -269,8 +269,9 @@ std::string format_kpis(const Kpis& kpis) {
   text << "ledger          items " << kpis.items_created << ", closed " << kpis.items_closed
        << (kpis.ledger_balanced ? " (balanced)" : " (UNBALANCED)") << ":";
   for (std::size_t o = 1; o < kOutcomeCount; ++o) {
-    if (kpis.outcomes[o] != 0)
+    if (kpis.outcomes[o] != 0) {
       text << " " << to_string(static_cast<Outcome>(o)) << "=" << kpis.outcomes[o];
+    }
   }
   text << "\n";
   text.precision(1);

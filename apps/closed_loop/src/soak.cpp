@@ -112,8 +112,9 @@ SoakVerdict evaluate_soak(const SoakRun& run, const SoakCriteria& criteria) {
       ++verdict.of_which_probe_late;
     }
   }
-  if (verdict.late_scans > 0)
+  if (verdict.late_scans > 0) {
     verdict.deadline_diagnosis = late_scan_diagnosis(run, criteria, verdict);
+  }
 
   // Fillets.
   const Kpis& kpis = run.kpis;

@@ -37,9 +37,13 @@ struct CameraEvidence {
   float sin_sum = 0.0F;
 
   void add(const FilletEstimate& estimate);
-  [[nodiscard]] float mean_y_mm() const { return frames ? y_sum_mm / frames : 0.0F; }
+  [[nodiscard]] float mean_y_mm() const {
+    return frames ? y_sum_mm / static_cast<float>(frames) : 0.0F;
+  }
   [[nodiscard]] float mean_angle_rad() const { return std::atan2(sin_sum, cos_sum); }
-  [[nodiscard]] float mean_confidence() const { return frames ? confidence_sum / frames : 0.0F; }
+  [[nodiscard]] float mean_confidence() const {
+    return frames ? confidence_sum / static_cast<float>(frames) : 0.0F;
+  }
   [[nodiscard]] Hand hand() const;
   [[nodiscard]] SideUp side() const;
   [[nodiscard]] bool singulated() const { return singulated_weight >= not_singulated_weight; }

@@ -50,8 +50,9 @@ TEST(Leveller, JamIsDetectedAfterSpinUp) {
   LevellerStation station(h.config);
   h.in.leveller_speed_rpm = 0.0F;  // blades not turning
   const int spin_up_scans = static_cast<int>(h.config.leveller.spin_up_s / 0.01F);
-  for (int scan = 0; scan < spin_up_scans - 1; ++scan)
+  for (int scan = 0; scan < spin_up_scans - 1; ++scan) {
     EXPECT_FALSE(station.update(h.context(), h.out));
+  }
   bool jammed = false;
   for (int scan = 0; scan < 5; ++scan) jammed = station.update(h.context(), h.out);
   EXPECT_TRUE(jammed);

@@ -222,8 +222,9 @@ TEST_F(TrackerTest, FloodedFrameIsClampedAndFlagged) {
 }
 
 TEST_F(TrackerTest, FullTableCountsOverflowInsteadOfCrashing) {
-  for (std::size_t i = 0; i < kMaxTrackedItems; ++i)
+  for (std::size_t i = 0; i < kMaxTrackedItems; ++i) {
     ASSERT_NE(h.tracker.create(0, 0.0F, false), nullptr);
+  }
   EXPECT_EQ(h.tracker.create(0, 0.0F, false), nullptr);
   EXPECT_EQ(h.tracker.overflows(), 1U);
 }

@@ -47,8 +47,9 @@ fl::CameraFrame full_frame(std::uint32_t sequence) {
 void publish_loop(const dds::Participant& participant, long samples, long interval_us,
                   long warmup) {
   dds::DdsCameraPublisher publisher(participant);
-  while (publisher.matched_readers() == 0)
+  while (publisher.matched_readers() == 0) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
   std::this_thread::sleep_for(std::chrono::milliseconds(200));  // let discovery settle
   auto next = std::chrono::steady_clock::now();
   for (long n = 1; n <= samples + warmup; ++n) {

@@ -30,7 +30,8 @@ void to_idl(const FilletRecord& record, fl_FilletLedgerRecord& sample) noexcept 
   sample.singulated = record.singulated;
   sample.flip_plate1 = record.flip_plate1;
   sample.flip_plate2 = record.flip_plate2;
-  sample.multilane_unit = record.multilane_unit;
+  // A small signed number (-1: none), not a character.
+  sample.multilane_unit = record.multilane_unit;  // NOLINT(bugprone-signed-char-misuse)
   sample.angle_at_camera1_rad = record.angle_at_camera1_rad;
   sample.final_angle_rad = record.final_angle_rad;
   sample.final_y_mm = record.final_y_mm;

@@ -73,6 +73,7 @@ PeerProcess::PeerProcess(const std::string& executable, const std::vector<std::s
   std::vector<std::string> argv_strings{executable};
   argv_strings.insert(argv_strings.end(), args.begin(), args.end());
   std::vector<char*> argv;
+  argv.reserve(argv_strings.size() + 1);
   for (auto& s : argv_strings) argv.push_back(s.data());
   argv.push_back(nullptr);
   pid_ = fork();

@@ -36,8 +36,9 @@ class DdsSecurity : public ::testing::Test {
     std::filesystem::remove(dir_.string() + ".log", ignored);
   }
   void SetUp() override {
-    if (status_ == 77)
+    if (status_ == 77) {
       GTEST_SKIP() << "openssl or Cyclone's security plugins missing: " << dir_.string() << ".log";
+    }
     ASSERT_EQ(status_, 0) << "make_security.sh failed, see " << dir_.string() << ".log";
   }
   static std::string uri(const char* role) {

@@ -89,8 +89,9 @@ TEST(DdsTelemetry, LedgerRecordsArriveFieldForField) {
   std::vector<fl_FilletLedgerRecord> received;
   ASSERT_TRUE(wait_until(
       [&] {
-        for (const auto& sample : take_all<fl_FilletLedgerRecord>(reader))
+        for (const auto& sample : take_all<fl_FilletLedgerRecord>(reader)) {
           received.push_back(sample);
+        }
         return received.size() == kRecords;
       },
       2s));
@@ -115,8 +116,9 @@ TEST(DdsTelemetry, ALateSubscriberGetsTheKeptHistory) {
   std::vector<fl_FilletLedgerRecord> received;
   ASSERT_TRUE(wait_until(
       [&] {
-        for (const auto& sample : take_all<fl_FilletLedgerRecord>(reader))
+        for (const auto& sample : take_all<fl_FilletLedgerRecord>(reader)) {
           received.push_back(sample);
+        }
         return received.size() >= fl_LEDGER_HISTORY;
       },
       kMatchTimeout));
@@ -167,8 +169,9 @@ TEST(DdsTelemetry, KpisAndCycleStatisticsFollowTheSnapshotsOncePerPeriod) {
   std::vector<fl_CycleStatistics> cycle;
   ASSERT_TRUE(wait_until(
       [&] {
-        for (const auto& sample : take_all<fl_CycleStatistics>(cycle_reader))
+        for (const auto& sample : take_all<fl_CycleStatistics>(cycle_reader)) {
           cycle.push_back(sample);
+        }
         return !cycle.empty() && cycle.back().time_ns == 2'000'000'000;
       },
       2s));

@@ -680,8 +680,9 @@ template <typename Law>
 LawParameters complete_parameters(const LawInfo<Law>& info, const LawParameters& given) {
   LawParameters complete;
   for (const auto& [name, value] : given) {
+    const std::string& wanted = name;  // a lambda captures no structured binding in clang 14
     const auto known = std::find_if(info.parameters.begin(), info.parameters.end(),
-                                    [&](const LawParameterInfo& p) { return p.name == name; });
+                                    [&](const LawParameterInfo& p) { return p.name == wanted; });
     if (known == info.parameters.end()) {
       throw std::invalid_argument("law '" + info.name + "': unknown parameter '" + name + "'");
     }

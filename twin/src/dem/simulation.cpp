@@ -761,8 +761,9 @@ void Simulation::rebuild_neighbors() {
     ++m.cell_start[cell + 1];
   }
   for (std::size_t c = 0; c < cells; ++c) m.cell_start[c + 1] += m.cell_start[c];
-  for (std::size_t k = 0; k < n; ++k)
+  for (std::size_t k = 0; k < n; ++k) {
     m.order[m.cell_start[m.particle_cell[k]]++] = static_cast<std::uint32_t>(k);
+  }
   for (std::size_t c = cells; c > 0; --c) m.cell_start[c] = m.cell_start[c - 1];
   m.cell_start[0] = 0;
 
@@ -883,7 +884,7 @@ void Simulation::rebuild_neighbors() {
         for (int y = std::max(cy - 1, 0); y <= std::min(cy + 1, dy - 1); ++y) {
           const int row = (z * dy + y) * dx;
           for (int x = std::max(cx - 1, 0); x <= std::min(cx + 1, dx - 1); ++x) {
-            const auto searched_cell = static_cast<std::size_t>(row + x);
+            const auto searched_cell = static_cast<std::size_t>(row) + static_cast<std::size_t>(x);
             const auto cell_begin = m.cell_particles.begin() + m.cell_start[searched_cell];
             const auto cell_end = m.cell_particles.begin() + m.cell_start[searched_cell + 1];
             // A cell lists its particles in ascending order (the binning is a stable counting
@@ -1168,8 +1169,9 @@ void Simulation::compute_forces() {
       const bool wall_list_valid = m.wall_list_offsets.size() == n + 1;
       std::uint64_t moved_meshes = 0;
       for (std::size_t mesh = 0; mesh < meshes; ++mesh) {
-        if (!wall_list_valid || m.mesh_moves_at_build[mesh] != m.mesh_moves[mesh])
+        if (!wall_list_valid || m.mesh_moves_at_build[mesh] != m.mesh_moves[mesh]) {
           moved_meshes |= wall_bit(planes + mesh);
+        }
       }
       const bool visit_by_bits = wall_count < 64;
       std::array<std::uint32_t, 16> candidate_triangle{};
@@ -1251,7 +1253,7 @@ void Simulation::compute_forces() {
                                 ? listed > listed_begin
                                 : m.mesh_boxes[mesh].squaredExteriorDistance(xi) < reach_squared;
           if (!near && (history & bit) == 0) continue;  // far, nothing to forget
-          MeshSlot* slots = &m.mesh_slots[mesh][i * kMeshSlots];
+          MeshSlot* slots = &m.mesh_slots[mesh][std::size_t{i} * kMeshSlots];
           int candidates = 0;
           if (near) {
             const auto& triangles = m.mesh_triangles[mesh];

@@ -222,8 +222,9 @@ DemPlant::DemPlant(const LineConfig& line, const DemPlantConfig& config)
   for (const dem::FilletTemplate& t : templates_) {
     std::vector<dem::BodyBond> bonds;
     bonds.reserve(t.bonds.size());
-    for (const dem::FilletBond& b : t.bonds)
+    for (const dem::FilletBond& b : t.bonds) {
       bonds.push_back({b.i, b.j, b.contact_radius_m, b.thickness_m});
+    }
     template_bonds_.push_back(std::move(bonds));
   }
   model_ = build_model();

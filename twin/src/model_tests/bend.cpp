@@ -71,8 +71,9 @@ BendResult run_bend(const BendParams& params) {
   {
     const dem::State& s = sim.state();
     for (std::size_t k = 0; k < s.size(); ++k) {
-      if (s.position_m[k].x() < -params.clamp_behind_edge_m)
+      if (s.position_m[k].x() < -params.clamp_behind_edge_m) {
         clamp_position[s.id[k]] = s.position_m[k];
+      }
     }
   }
   auto hold = [&] {

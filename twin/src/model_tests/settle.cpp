@@ -81,8 +81,9 @@ SettleResult run_settle(const SettleParams& params) {
       result.impact_kinetic_j = sample.kinetic_j;
       impact_total_j = sample.total_j;
     }
-    if (impacted)
+    if (impacted) {
       result.energy_gain_j = std::max(result.energy_gain_j, sample.total_j - impact_total_j);
+    }
   };
   record();
   // Single steps until the first contact, so the impact energy is taken at the touch.

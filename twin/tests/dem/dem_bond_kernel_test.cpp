@@ -78,8 +78,9 @@ BondArrays random_bonds(std::uint32_t seed) {
   for (std::uint32_t k = 0; k < 203; ++k) {
     Bond bond;
     bond.i = particle(random);
-    do bond.j = particle(random);
-    while (bond.j == bond.i);
+    do {
+      bond.j = particle(random);
+    } while (bond.j == bond.i);
     const Vec3 offset = a.position_m[bond.i] - a.position_m[bond.j];
     const double distance = offset.norm();
     bond.rest_length_m = distance * (1.0 + 0.02 * unit(random));
@@ -207,20 +208,24 @@ TEST(DemBondKernel, AlternatingTypesBondAsOneRunPerThread) {
   std::vector<Vec3> positions;
   std::vector<std::uint8_t> types;
   const double pitch = 2.0 * kRadius;
-  for (int x = 0; x < 5; ++x)
-    for (int y = 0; y < 4; ++y)
+  for (int x = 0; x < 5; ++x) {
+    for (int y = 0; y < 4; ++y) {
       for (int z = 0; z < 3; ++z) {
         positions.emplace_back(x * pitch, y * pitch, z * pitch);
         types.push_back(static_cast<std::uint8_t>((x + y + z) % 2));
       }
+    }
+  }
   std::vector<BodyBond> bonds;
   std::size_t b_to_a = 0;
-  for (std::uint32_t a = 0; a < positions.size(); ++a)
-    for (std::uint32_t b = a + 1; b < positions.size(); ++b)
+  for (std::uint32_t a = 0; a < positions.size(); ++a) {
+    for (std::uint32_t b = a + 1; b < positions.size(); ++b) {
       if (types[a] != types[b] && (positions[a] - positions[b]).norm() < pitch * 1.5) {
         bonds.push_back({a, b, kAppendixBContactRadiusM});
         b_to_a += types[a] == 1 ? 1 : 0;
       }
+    }
+  }
   ASSERT_GT(b_to_a, 0U);  // both orders occur
   ASSERT_LT(b_to_a, bonds.size());
   const std::vector<double> radii(positions.size(), kRadius);

@@ -102,8 +102,9 @@ TEST(DemBondOrder, ReorderingChangesOnlyTheRounding) {
     sim.step(300);
     EXPECT_EQ(sim.stats().particle_sorts > 0, sort_every > 0);
     std::map<std::uint32_t, Vec3> by_id;
-    for (std::size_t k = 0; k < sim.state().size(); ++k)
+    for (std::size_t k = 0; k < sim.state().size(); ++k) {
       by_id[sim.state().id[k]] = sim.state().position_m[k];
+    }
     positions_by_id.push_back(by_id);
   }
   ASSERT_EQ(positions_by_id[0].size(), positions_by_id[1].size());

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <utility>
 
 #include "dem_test_support.hpp"
 #include "fl/twin/dem/config.hpp"
@@ -15,9 +16,9 @@ namespace {
 
 using test::kRadius;
 
-ModelSpec bonded_model(LawSpec bond, double dt, Vec3 gravity = Vec3::Zero(),
+ModelSpec bonded_model(const LawSpec& bond, double dt, const Vec3& gravity = Vec3::Zero(),
                        std::vector<LawSpec> contact = {test::hertz(1.0)}, bool plane = false) {
-  ModelSpec spec = test::ball_model(contact, dt, gravity, plane);
+  ModelSpec spec = test::ball_model(std::move(contact), dt, gravity, plane);
   spec.interactions[0].bond_law = bond;
   return spec;
 }
@@ -99,10 +100,11 @@ TEST(DemBond, BreaksBeyondContactRadii) {
   for (int step = 0; step < 5000 && distance_at_break < 0.0; ++step) {
     sim.step();
     const double distance = (sim.state().position_m[1] - sim.state().position_m[0]).norm();
-    if (sim.state().bond_states[0].broken)
+    if (sim.state().bond_states[0].broken) {
       distance_at_break = distance;
-    else
+    } else {
       distance_before = distance;
+    }
   }
   EXPECT_GT(distance_at_break, 2.0 * contact_radius);
   EXPECT_LE(distance_before, 2.0 * contact_radius);
@@ -185,16 +187,20 @@ TEST(DemEnergy, BondedClusterBouncingConservesEnergy) {
   std::vector<std::uint8_t> types;
   std::vector<BodyBond> bonds;
   const double pitch = 2.0 * kRadius;
-  for (int x = 0; x < 3; ++x)
-    for (int y = 0; y < 3; ++y)
+  for (int x = 0; x < 3; ++x) {
+    for (int y = 0; y < 3; ++y) {
       for (int z = 0; z < 3; ++z) {
         positions.emplace_back((x - 1) * pitch, (y - 1) * pitch, (z - 1) * pitch);
         radii.push_back(kRadius);
         types.push_back(0);
       }
-  for (std::uint32_t a = 0; a < positions.size(); ++a)
-    for (std::uint32_t b = a + 1; b < positions.size(); ++b)
+    }
+  }
+  for (std::uint32_t a = 0; a < positions.size(); ++a) {
+    for (std::uint32_t b = a + 1; b < positions.size(); ++b) {
       if ((positions[a] - positions[b]).norm() < pitch * 1.01) bonds.push_back({a, b, 0.01});
+    }
+  }
   BodyPose pose;
   pose.position_m = Vec3(0, 0, 0.03);
   pose.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Vec3(1, 1, 0).normalized()));
@@ -232,8 +238,9 @@ double clump_slide_m(double tan_theta, double seconds) {
   BodyPose pose;
   pose.position_m = Vec3(0, 0, kRadius);
   sim.add_body(positions, radii, types, bonds, pose);
-  for (double& inverse_inertia : sim.mutable_state().inverse_inertia_per_kg_m2)
+  for (double& inverse_inertia : sim.mutable_state().inverse_inertia_per_kg_m2) {
     inverse_inertia = 0.0;
+  }
   sim.step(static_cast<std::size_t>(0.05 / dt));  // settle
   const double x0 = sim.state().position_m[0].x();
   sim.step(static_cast<std::size_t>(seconds / dt));
@@ -266,12 +273,15 @@ State run_bed(int threads) {
   Simulation sim(std::make_shared<Model>(spec));
   std::mt19937 random(42);
   std::uniform_real_distribution<double> jitter(-0.0005, 0.0005);
-  for (int x = 0; x < 10; ++x)
-    for (int y = 0; y < 10; ++y)
-      for (int z = 0; z < 8; ++z)
+  for (int x = 0; x < 10; ++x) {
+    for (int y = 0; y < 10; ++y) {
+      for (int z = 0; z < 8; ++z) {
         sim.add_sphere(
             {Vec3(x * 0.0088 + jitter(random), y * 0.0088 + jitter(random), 0.005 + z * 0.0088),
              kRadius, 0});
+      }
+    }
+  }
   sim.wall("floor").surface_velocity_m_per_s = Vec3(0.3, 0, 0);
   sim.step(1500);
   return sim.state();
@@ -304,8 +314,10 @@ TEST(DemDeterminism, NeighbourListDoesNotDependOnThreads) {
     spec.min_particles_per_thread = 1;
     Simulation sim(std::make_shared<Model>(spec));
     for (int k = 0; k < 200; ++k) {  // a 5 x 5 x 8 pile at 7.9 mm: every neighbour overlaps
-      sim.add_sphere(
-          {Vec3((k % 5) * 0.0079, (k / 5 % 5) * 0.0079, 0.0039 + (k / 25) * 0.0079), kRadius, 0});
+      const int column = k % 5;
+      const int row = k / 5 % 5;
+      const int layer = k / 25;
+      sim.add_sphere({Vec3(column * 0.0079, row * 0.0079, 0.0039 + layer * 0.0079), kRadius, 0});
     }
     sim.prepare();
     EXPECT_EQ(sim.active_thread_count(), threads);

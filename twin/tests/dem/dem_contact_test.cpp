@@ -196,7 +196,7 @@ TEST(DemMesh, FallingSphereMeetsAMeshFloorAsItMeetsAPlane) {
     if (mesh_floor) {
       MeshWallSpec floor{"floor", 1, {}};
       const double cell = 0.01;  // 10 x 10 cells of two triangles over 0.1 m x 0.1 m
-      for (int a = -5; a < 5; ++a)
+      for (int a = -5; a < 5; ++a) {
         for (int b = -5; b < 5; ++b) {
           const Vec3 p0(a * cell, b * cell, 0);
           const Vec3 p1((a + 1) * cell, b * cell, 0);
@@ -205,6 +205,7 @@ TEST(DemMesh, FallingSphereMeetsAMeshFloorAsItMeetsAPlane) {
           floor.triangles.push_back({{p0, p1, p2}});
           floor.triangles.push_back({{p0, p2, p3}});
         }
+      }
       spec.meshes.push_back(floor);
     }
     Simulation sim(std::make_shared<Model>(spec));

@@ -23,7 +23,7 @@ inline double sphere_mass(double radius = kRadius) {
 // One fillet material; type 0 "ball", type 1 "wall" (same material). `ball_laws` applies to
 // ball-ball and ball-wall pairs.
 inline ModelSpec ball_model(std::vector<LawSpec> ball_laws, double timestep_s,
-                            Vec3 gravity = Vec3::Zero(), bool with_plane = false) {
+                            const Vec3& gravity = Vec3::Zero(), bool with_plane = false) {
   ModelSpec spec;
   spec.materials = {{"fillet", kYoungs, kPoisson, kDensity}};
   spec.types = {{"ball", 0}, {"wall", 0}};
@@ -56,9 +56,11 @@ inline LawSpec bpm(double normal_n_per_m3, double shear_n_per_m3, double normal_
 inline std::vector<Vec3> block_5x4x3_positions() {
   std::vector<Vec3> positions;
   const double pitch = 2.0 * kRadius;
-  for (int x = 0; x < 5; ++x)
-    for (int y = 0; y < 4; ++y)
+  for (int x = 0; x < 5; ++x) {
+    for (int y = 0; y < 4; ++y) {
       for (int z = 0; z < 3; ++z) positions.emplace_back(x * pitch, y * pitch, z * pitch);
+    }
+  }
   return positions;
 }
 
@@ -69,10 +71,13 @@ inline std::vector<BodyBond> block_bonds(const std::vector<Vec3>& positions,
                                          double reach_in_pitches) {
   std::vector<BodyBond> bonds;
   const double reach_m = 2.0 * kRadius * reach_in_pitches * 1.001;
-  for (std::uint32_t a = 0; a < positions.size(); ++a)
-    for (std::uint32_t b = a + 1; b < positions.size(); ++b)
-      if ((positions[a] - positions[b]).norm() < reach_m)
+  for (std::uint32_t a = 0; a < positions.size(); ++a) {
+    for (std::uint32_t b = a + 1; b < positions.size(); ++b) {
+      if ((positions[a] - positions[b]).norm() < reach_m) {
         bonds.push_back({a, b, kAppendixBContactRadiusM});
+      }
+    }
+  }
   return bonds;
 }
 

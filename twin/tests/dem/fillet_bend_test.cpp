@@ -113,6 +113,7 @@ TEST(InPlaneBendFit, StandingAxisGivesZero) {
   const Eigen::Matrix3d standing =
       Eigen::AngleAxisd(-M_PI / 2.0, Eigen::Vector3d::UnitY()).toRotationMatrix();
   std::vector<Eigen::Vector3d> world;
+  world.reserve(raster.size());
   for (const auto& t : raster) world.push_back(standing * t + Eigen::Vector3d(0.001, 0.0, 0.0));
   EXPECT_EQ(fitted(raster, standing, world), 0.0);
 }

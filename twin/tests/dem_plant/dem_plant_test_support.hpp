@@ -2,6 +2,7 @@
 // a moment), the reference line, belts running at their nominal speeds.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
 
@@ -31,7 +32,7 @@ struct DemRig {
   }
   void step(std::int64_t dt_ns = 10 * kMs) { plant->step(out, dt_ns, in); }
   void run(double seconds, std::int64_t dt_ns = 10 * kMs) {
-    const auto steps = static_cast<std::int64_t>(seconds * 1e9 / static_cast<double>(dt_ns) + 0.5);
+    const auto steps = std::llround(seconds * 1e9 / static_cast<double>(dt_ns));
     for (std::int64_t i = 0; i < steps; ++i) step(dt_ns);
   }
   LineConfig line;

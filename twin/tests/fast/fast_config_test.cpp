@@ -23,7 +23,7 @@ std::string read_text(const std::filesystem::path& file) {
 
 // Writes `text` to a file in the test's temporary directory.
 std::filesystem::path write_temp(const std::string& name, const std::string& text) {
-  const auto path = std::filesystem::temp_directory_path() / name;
+  auto path = std::filesystem::temp_directory_path() / name;
   std::ofstream(path) << text;
   return path;
 }

@@ -2,6 +2,7 @@
 // image that runs the belts, and stepping helpers.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -34,7 +35,7 @@ struct Rig {
 
   // Runs whole steps of dt for `seconds`.
   void run(double seconds, std::int64_t dt_ns = kMs) {
-    const auto steps = static_cast<std::int64_t>(seconds * 1e9 / static_cast<double>(dt_ns) + 0.5);
+    const auto steps = std::llround(seconds * 1e9 / static_cast<double>(dt_ns));
     for (std::int64_t i = 0; i < steps; ++i) step(dt_ns);
   }
 

@@ -38,7 +38,7 @@ std::vector<cv::Mat> frames_for(const RenderCamera& camera, bool pairs) {
   cv::RNG rng(99);
   for (int i = 0; i < 8; ++i) {
     fl::render::Scene scene;
-    scene.seed = static_cast<std::uint64_t>(i + 1);
+    scene.seed = static_cast<std::uint64_t>(i) + 1;
     scene.imaging.noise_sigma = 3.0;
     scene.imaging.lighting_gradient = 0.2;
     fl::render::FilletInstance fillet;

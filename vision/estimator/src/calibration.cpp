@@ -356,8 +356,9 @@ BeltCalibration read_calibration(fl::YamlReader& reader) {
       const auto k = intrinsics.read_doubles("camera_matrix", fl::Range::any(), 9);
       const auto d = intrinsics.read_doubles("distortion", fl::Range::closed(-100.0, 100.0), 5);
       if (k.size() == 9) {
-        for (int i = 0; i < 9; ++i)
+        for (int i = 0; i < 9; ++i) {
           calibration.camera_matrix.val[i] = k[static_cast<std::size_t>(i)];
+        }
         const auto& m = calibration.camera_matrix;
         if (!(m(0, 0) > 0.0 && m(1, 1) > 0.0 && m(0, 1) == 0.0 && m(1, 0) == 0.0 &&
               m(2, 0) == 0.0 && m(2, 1) == 0.0 && m(2, 2) == 1.0)) {

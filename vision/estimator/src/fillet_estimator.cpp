@@ -556,6 +556,7 @@ BlobResult FilletEstimator::measure_blob(const std::vector<cv::Point>& contour) 
   std::vector<int> hull_indices;
   cv::convexHull(straight, hull_indices, false, false);
   std::vector<cv::Point2f> hull;
+  hull.reserve(hull_indices.size());
   for (int i : hull_indices) hull.push_back(straight[static_cast<std::size_t>(i)]);
   const double hull_area = cv::contourArea(hull);
   f.solidity = hull_area > 0.0 ? std::abs(ms.m00) / hull_area : 0.0;

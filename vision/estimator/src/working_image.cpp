@@ -69,7 +69,7 @@ cv::Rect grown(const cv::Rect& rect, int reach_px, const cv::Size& image) {
 
 void split_bgr_row(const std::uint8_t* bgr, int cols, std::uint8_t* blue, std::uint8_t* green,
                    std::uint8_t* red) {
-  int col = 0;
+  std::ptrdiff_t col = 0;  // a pointer offset: 3 * col must not overflow int
 #if CV_SIMD128
   for (; col + 16 <= cols; col += 16) {
     cv::v_uint8x16 b, g, r;
@@ -89,8 +89,8 @@ void split_bgr_row(const std::uint8_t* bgr, int cols, std::uint8_t* blue, std::u
 namespace {
 
 // The scalar halving of output pixels [col, out_cols).
-void halve_tail(const std::uint8_t* top, const std::uint8_t* bottom, int col, int out_cols,
-                std::uint8_t* blue, std::uint8_t* green, std::uint8_t* red) {
+void halve_tail(const std::uint8_t* top, const std::uint8_t* bottom, std::ptrdiff_t col,
+                int out_cols, std::uint8_t* blue, std::uint8_t* green, std::uint8_t* red) {
   for (; col < out_cols; ++col) {
     const std::uint8_t* t = top + 6 * col;
     const std::uint8_t* b = bottom + 6 * col;
@@ -114,15 +114,16 @@ void halve_tail(const std::uint8_t* top, const std::uint8_t* bottom, int col, in
 // the top bit set). Both lanes use the same table.
 constexpr std::array<std::array<std::int8_t, 32>, 9> halving_shuffles() {
   std::array<std::array<std::int8_t, 32>, 9> shuffles{};
-  for (int channel = 0; channel < 3; ++channel) {
-    for (int part = 0; part < 3; ++part) {
-      auto& shuffle = shuffles[static_cast<std::size_t>(3 * channel + part)];
-      for (int pair = 0; pair < 8; ++pair) {
-        for (int pixel = 0; pixel < 2; ++pixel) {
-          const int source = 6 * pair + 3 * pixel + channel;
-          const auto index = static_cast<std::int8_t>(source / 16 == part ? source % 16 : -128);
-          shuffle[static_cast<std::size_t>(2 * pair + pixel)] = index;
-          shuffle[static_cast<std::size_t>(16 + 2 * pair + pixel)] = index;
+  for (std::size_t channel = 0; channel < 3; ++channel) {
+    for (std::size_t part = 0; part < 3; ++part) {
+      auto& shuffle = shuffles[3 * channel + part];
+      for (std::size_t pair = 0; pair < 8; ++pair) {
+        for (std::size_t pixel = 0; pixel < 2; ++pixel) {
+          const std::size_t source = 6 * pair + 3 * pixel + channel;
+          const auto index =
+              static_cast<std::int8_t>(source / 16 == part ? static_cast<int>(source % 16) : -128);
+          shuffle[2 * pair + pixel] = index;
+          shuffle[16 + 2 * pair + pixel] = index;
         }
       }
     }
@@ -133,7 +134,7 @@ constexpr auto kHalvingShuffles = halving_shuffles();
 
 // A 16-byte part of both 48-byte groups of a row, the first group's in lane 0.
 __attribute__((target("avx2"), always_inline)) inline __m256i group_parts(const std::uint8_t* row,
-                                                                          int part) {
+                                                                          std::size_t part) {
   const __m128i first = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + 16 * part));
   const __m128i second = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + 48 + 16 * part));
   return _mm256_inserti128_si256(_mm256_castsi128_si256(first), second, 1);
@@ -145,11 +146,11 @@ __attribute__((target("avx2"), always_inline)) inline void row_pair_sums(const s
                                                                          __m256i (&sums)[3]) {
   const __m256i parts[3] = {group_parts(row, 0), group_parts(row, 1), group_parts(row, 2)};
   const __m256i ones = _mm256_set1_epi8(1);
-  for (int channel = 0; channel < 3; ++channel) {
+  for (std::size_t channel = 0; channel < 3; ++channel) {
     __m256i gathered = _mm256_setzero_si256();
-    for (int part = 0; part < 3; ++part) {
-      const __m256i shuffle = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(
-          kHalvingShuffles[static_cast<std::size_t>(3 * channel + part)].data()));
+    for (std::size_t part = 0; part < 3; ++part) {
+      const __m256i shuffle = _mm256_loadu_si256(
+          reinterpret_cast<const __m256i*>(kHalvingShuffles[3 * channel + part].data()));
       gathered = _mm256_or_si256(gathered, _mm256_shuffle_epi8(parts[part], shuffle));
     }
     sums[channel] = _mm256_maddubs_epi16(gathered, ones);  // byte pairs: 2 pixels, one channel
@@ -161,7 +162,7 @@ __attribute__((target("avx2"))) void halve_avx2(const std::uint8_t* top, const s
                                                 std::uint8_t* green, std::uint8_t* red) {
   std::uint8_t* const planes[3] = {blue, green, red};
   const __m256i rounding = _mm256_set1_epi16(2);
-  int col = 0;
+  std::ptrdiff_t col = 0;
   for (; col + 16 <= out_cols; col += 16) {
     __m256i top_sums[3], bottom_sums[3];
     row_pair_sums(top + 6 * col, top_sums);
@@ -189,12 +190,12 @@ bool cpu_runs_avx2() {
 
 void halve_portable(const std::uint8_t* top, const std::uint8_t* bottom, int out_cols,
                     std::uint8_t* blue, std::uint8_t* green, std::uint8_t* red) {
-  int col = 0;
+  std::ptrdiff_t col = 0;
 #if CV_SIMD128
   // 16 outputs from 96 bytes of each row.
   for (; col + 16 <= out_cols; col += 16) {
     cv::v_uint8x16 top_b[2], top_g[2], top_r[2], bottom_b[2], bottom_g[2], bottom_r[2];
-    for (int half = 0; half < 2; ++half) {
+    for (std::ptrdiff_t half = 0; half < 2; ++half) {
       cv::v_load_deinterleave(top + 6 * col + 48 * half, top_b[half], top_g[half], top_r[half]);
       cv::v_load_deinterleave(bottom + 6 * col + 48 * half, bottom_b[half], bottom_g[half],
                               bottom_r[half]);
@@ -285,24 +286,24 @@ cv::Rect box_above(const std::vector<std::uint8_t>& row_max,
 
 void segment_meat(const cv::Mat& chroma, int threshold, const cv::Rect& above, cv::Mat& mask,
                   cv::Mat& scratch, std::vector<std::vector<cv::Point>>& contours) {
-  static const cv::Mat kOpen = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(3, 3));
-  static const cv::Mat kClose = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5));
+  static const cv::Mat open_element = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(3, 3));
+  static const cv::Mat close_element = cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(5, 5));
   mask.create(chroma.size(), CV_8UC1);
   mask.setTo(0);
   contours.clear();
   // The opening reads one pixel around each pixel it keeps: two rows and columns of zeros
   // around the thresholded box make it the whole frame's.
   const cv::Rect open_roi =
-      grown(above & cv::Rect(0, 0, chroma.cols, chroma.rows), kOpen.cols - 1, mask.size());
+      grown(above & cv::Rect(0, 0, chroma.cols, chroma.rows), open_element.cols - 1, mask.size());
   if (open_roi.empty()) return;
   cv::threshold(chroma(open_roi), mask(open_roi), threshold, 255, cv::THRESH_BINARY);
-  cv::morphologyEx(mask(open_roi), mask(open_roi), cv::MORPH_OPEN, kOpen);
+  cv::morphologyEx(mask(open_roi), mask(open_roi), cv::MORPH_OPEN, open_element);
   const cv::Rect opened = cv::boundingRect(mask(open_roi)) + open_roi.tl();
   if (opened.empty()) return;
   // Closing only adds pixels within its radius of the foreground, and reads 2 radii around
   // them: on the foreground's box grown by twice the radius the result is the full frame's.
-  const cv::Rect close_roi = grown(opened, kClose.cols - 1, mask.size());
-  cv::morphologyEx(mask(close_roi), scratch, cv::MORPH_CLOSE, kClose);
+  const cv::Rect close_roi = grown(opened, close_element.cols - 1, mask.size());
+  cv::morphologyEx(mask(close_roi), scratch, cv::MORPH_CLOSE, close_element);
   scratch.copyTo(mask(close_roi));
   // The closed mask lies within the closing's radius of the opened box (outside it only at the
   // frame's edges, where the erosion takes the outside for meat), so the contours traced on

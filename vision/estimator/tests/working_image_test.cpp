@@ -61,11 +61,11 @@ std::vector<cv::Mat> halved_planes(const cv::Mat& frame, int segment, HalvingCod
   for (int row = 0; row < frame.rows / 2; ++row) {
     for (int first = 0; first < frame.cols / 2; first += segment) {
       const int count = std::min(segment, frame.cols / 2 - first);
-      halve_bgr_rows(frame.ptr<std::uint8_t>(2 * row) + 6 * first,
-                     frame.ptr<std::uint8_t>(2 * row + 1) + 6 * first, count,
-                     planes[0].ptr<std::uint8_t>(row) + first,
-                     planes[1].ptr<std::uint8_t>(row) + first,
-                     planes[2].ptr<std::uint8_t>(row) + first, code);
+      const auto offset = 6 * static_cast<std::ptrdiff_t>(first);
+      halve_bgr_rows(
+          frame.ptr<std::uint8_t>(2 * row) + offset, frame.ptr<std::uint8_t>(2 * row + 1) + offset,
+          count, planes[0].ptr<std::uint8_t>(row) + first, planes[1].ptr<std::uint8_t>(row) + first,
+          planes[2].ptr<std::uint8_t>(row) + first, code);
     }
   }
   return planes;

@@ -197,8 +197,9 @@ std::map<std::string, std::string> Cursor::string_map() {
 std::map<std::uint16_t, std::uint64_t> Cursor::u16_u64_map() {
   const std::uint32_t length = u32();
   need(length, "map");
-  if (length % 10 != 0)
+  if (length % 10 != 0) {
     fail("map<uint16, uint64> length " + std::to_string(length) + " is not a multiple of 10");
+  }
   Cursor entries(bytes_.subspan(position_, length), offset(), context_);
   position_ += length;
   std::map<std::uint16_t, std::uint64_t> map;
@@ -563,8 +564,9 @@ Bytes compress(Compression compression, ByteView records, int zstd_level) {
 Bytes decompress(std::string_view compression, ByteView payload, std::uint64_t uncompressed_size,
                  std::uint64_t offset, std::uint64_t max_uncompressed) {
   const std::optional<Compression> kind = parse_compression(compression);
-  if (!kind)
+  if (!kind) {
     throw Error("chunk uses unknown compression '" + std::string(compression) + "'", offset);
+  }
   auto size_error = [&](const std::string& why) {
     return Error("chunk (" + std::string(compression_name(*kind)) + ") uncompressed_size " +
                      std::to_string(uncompressed_size) + " " + why,
@@ -599,8 +601,9 @@ Bytes decompress(std::string_view compression, ByteView payload, std::uint64_t u
       }
       const unsigned long long content =
           ZSTD_getFrameContentSize(payload.data() + at, payload.size() - at);
-      if (content == ZSTD_CONTENTSIZE_ERROR)
+      if (content == ZSTD_CONTENTSIZE_ERROR) {
         throw Error("zstd frame header is invalid", offset + at);
+      }
       if (content == ZSTD_CONTENTSIZE_UNKNOWN) {
         size_known = false;
       } else {

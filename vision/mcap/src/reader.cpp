@@ -638,8 +638,9 @@ void Reader::scan_messages(const MessageFilter& filter, const MessageCallback& c
   }
   std::stable_sort(selected.begin(), selected.end(),
                    [](const Message* a, const Message* b) { return a->log_time < b->log_time; });
-  for (const Message* message : selected)
+  for (const Message* message : selected) {
     callback(*message, scanned.channels.at(message->channel_id));
+  }
 }
 
 std::vector<Message> Reader::read_messages(const MessageFilter& filter) const {

@@ -226,9 +226,10 @@ void Writer::flush_chunk() {
   // disk is reported at the chunk that did not fit.
   errno = 0;
   out_.flush();
-  if (!out_)
+  if (!out_) {
     throw std::runtime_error(where_ + ": flush failed at byte " + std::to_string(position_) +
                              system_reason());
+  }
   sync_to_disk();
 
   chunk_records_.clear();
@@ -296,8 +297,9 @@ void Writer::close() {
   }
   if (owned_file_) {
     owned_file_->close();
-    if (!*owned_file_)
+    if (!*owned_file_) {
       throw std::runtime_error(where_ + ": closing the file failed" + system_reason());
+    }
   }
 }
 

@@ -97,8 +97,9 @@ int check_file(const std::filesystem::path& path) {
   filter.end_time = log_time(119);
   filter.topics = {kTopics[2]};
   const std::vector<Message> events = reader.read_messages(filter);
-  if (events.size() != 20)
+  if (events.size() != 20) {
     return fail(path.string() + ": filtered read gave " + std::to_string(events.size()));
+  }
   const Summary& summary = reader.summary();
   if (!summary.statistics || summary.statistics->message_count != kMessageCount) {
     return fail(path.string() + ": statistics missing or wrong");

@@ -22,7 +22,7 @@ struct WrittenFile {
 struct RecordingShape {
   int message_count = 300;  // 100 per channel: enough for many chunks, quick to check
   // 16 KiB chunks against 1-10 KB frames: a few frames per chunk, so dozens of chunks.
-  std::uint64_t chunk_size = 16 * 1024;
+  std::uint64_t chunk_size = std::uint64_t{16} * 1024;
   bool with_attachment_and_metadata = true;
   bool shuffle_times = false;  // log times out of write order, so chunks overlap in time
   // Camera frame sizes: frame_min_bytes plus up to frame_spread_bytes. 1000..9999 bytes by

@@ -30,8 +30,9 @@ Bytes cut(const Bytes& bytes, std::size_t length) {
 }
 
 void write_u64(Bytes& bytes, std::uint64_t at, std::uint64_t value) {
-  for (int i = 0; i < 8; ++i)
+  for (int i = 0; i < 8; ++i) {
     bytes[at + static_cast<std::uint64_t>(i)] = static_cast<std::uint8_t>(value >> (8 * i));
+  }
 }
 
 std::uint64_t first_offset_of(const Bytes& bytes, Opcode opcode) {

@@ -120,9 +120,10 @@ std::optional<cv::Mat> decode_png_fast(std::span<const std::uint8_t> png) {
       }
       channels = colour_type == 0 ? 1 : 3;
       have_header = true;
-    } else if (!have_header) {
-      return std::nullopt;  // IHDR must come first
-    } else if (std::memcmp(type, "IDAT", 4) == 0) {
+      continue;
+    }
+    if (!have_header) return std::nullopt;  // IHDR must come first
+    if (std::memcmp(type, "IDAT", 4) == 0) {
       compressed.insert(compressed.end(), data, data + length);
     } else if (std::memcmp(type, "IEND", 4) == 0) {
       ended = true;

@@ -27,7 +27,7 @@ std::vector<TrueFillet> true_fillets(const render::RenderedFrame& frame) {
 TwinFrameSource::TwinFrameSource(std::shared_ptr<const render::FilletRenderer> renderer,
                                  const TwinScene& scene, TwinCameraSettings settings,
                                  std::string camera_name)
-    : renderer_(std::move(renderer)), scene_(scene), settings_(settings) {
+    : renderer_(std::move(renderer)), scene_(scene), settings_(std::move(settings)) {
   if (!renderer_) throw std::invalid_argument("TwinFrameSource needs a renderer");
   if (settings_.width_px <= 0 || settings_.height_px <= 0 || settings_.binning < 1 ||
       !(settings_.field_along_travel_mm > 0.0)) {

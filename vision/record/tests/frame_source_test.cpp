@@ -54,8 +54,9 @@ class StaticScene final : public TwinScene {
 TEST(DirectoryFrameSource, ReadsImagesInNameOrderBitExact) {
   const auto dir = fresh_directory("order");
   // Written out of order; 2 digits so that name order is frame order.
-  for (int i : {2, 0, 1})
+  for (int i : {2, 0, 1}) {
     cv::imwrite((dir / ("frame_0" + std::to_string(i) + ".png")).string(), test_frame(i));
+  }
   std::ofstream(dir / "notes.txt") << "not an image, skipped";
   const std::int64_t period_ns = 40'000'000;  // 25 Hz
   DirectoryFrameSource source(dir, period_ns);

@@ -63,8 +63,9 @@ void append_chunk(Bytes& png, const char* type, const Bytes& data) {
   typed.insert(typed.end(), data.begin(), data.end());
   png.insert(png.end(), typed.begin(), typed.end());
   const std::uint32_t crc = libdeflate_crc32(0, typed.data(), typed.size());
-  for (int shift = 24; shift >= 0; shift -= 8)
+  for (int shift = 24; shift >= 0; shift -= 8) {
     png.push_back(static_cast<std::uint8_t>(crc >> shift));
+  }
 }
 
 int paeth_predictor(int left, int up, int up_left) {
@@ -104,8 +105,9 @@ Bytes encode_with_filters(const cv::Mat& image, const std::function<int(int)>& f
   Bytes png{0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
   Bytes header;
   for (const int value : {image.cols, image.rows}) {
-    for (int shift = 24; shift >= 0; shift -= 8)
+    for (int shift = 24; shift >= 0; shift -= 8) {
       header.push_back(static_cast<std::uint8_t>(value >> shift));
+    }
   }
   header.insert(header.end(), {8, static_cast<std::uint8_t>(channels == 1 ? 0 : 2), 0, 0, 0});
   append_chunk(png, "IHDR", header);

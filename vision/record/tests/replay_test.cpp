@@ -29,8 +29,8 @@ class OneFilletScene final : public TwinScene {
 // `lose_frame`, the image of that sequence is missing while its estimates are recorded (a
 // frame a recorder dropped, or a file cut between the two messages).
 std::filesystem::path write_vision_recording(std::uint32_t lose_frame = 0) {
-  const auto path = std::filesystem::temp_directory_path() /
-                    ("fl_replay_test_" + std::to_string(::getpid()) + ".mcap");
+  auto path = std::filesystem::temp_directory_path() /
+              ("fl_replay_test_" + std::to_string(::getpid()) + ".mcap");
   OneFilletScene scene;
   TwinCameraSettings settings;
   settings.width_px = 320;  // as the checked-in recordings

@@ -45,7 +45,8 @@ std::map<std::string, std::string> good_fillet() {
 std::string object_text(const std::map<std::string, std::string>& fields) {
   std::string text = "{";
   for (const auto& [key, value] : fields) {
-    text += (text.size() > 1 ? "," : "") + ("\"" + key + "\":" + value);
+    if (text.size() > 1) text += ",";
+    text += "\"" + key + "\":" + value;
   }
   return text + "}";
 }

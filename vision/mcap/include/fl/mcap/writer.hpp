@@ -26,7 +26,7 @@ struct WriterOptions {
   int zstd_level = 3;  // zstd's own default: fast enough for live camera streams
   // A chunk is closed once its uncompressed records reach this size. 1 MiB keeps random
   // access cheap while compressing well (the reference writers use a similar default).
-  std::uint64_t chunk_size = 1024 * 1024;
+  std::uint64_t chunk_size = std::uint64_t{1024} * 1024;
   bool use_chunks = true;     // false: messages go straight into the data section, unindexed
   bool write_summary = true;  // false: the footer points at no summary (readers must scan)
   // Writers on a file: fdatasync after each closed chunk and at close, so that a power loss
