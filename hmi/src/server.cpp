@@ -447,10 +447,10 @@ struct HmiServer::Impl {
   }
 };
 
-HmiServer::HmiServer(HmiConfig config, TripleBuffer<LineStatus>& status, nlohmann::json layout,
-                     HmiCommands commands, ClockNs clock)
-    : impl_(std::make_unique<Impl>(std::move(config), status, std::move(layout),
-                                   std::move(commands), std::move(clock))) {
+HmiServer::HmiServer(HmiConfig config, TripleBuffer<LineStatus>& status,
+                     const nlohmann::json& layout, HmiCommands commands, ClockNs clock)
+    : impl_(std::make_unique<Impl>(std::move(config), status, layout, std::move(commands),
+                                   std::move(clock))) {
   if (!impl_->commands.start_line || !impl_->commands.stop_line ||
       !impl_->commands.acknowledge_faults) {
     throw std::invalid_argument("HmiServer: start, stop and acknowledge commands are required");

@@ -160,8 +160,9 @@ class WebSocketClient {
     }
     const std::array<char, 4> mask = {0x12, 0x34, 0x56, 0x78};
     frame.append(mask.data(), mask.size());
-    for (std::size_t i = 0; i < text.size(); ++i)
+    for (std::size_t i = 0; i < text.size(); ++i) {
       frame.push_back(static_cast<char>(text[i] ^ mask[i % 4]));
+    }
     socket_.send_all(frame);
   }
 

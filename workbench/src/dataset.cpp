@@ -214,7 +214,7 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
   }
 
   // Header.
-  static const ColumnRule kCommandTime{"time", Quantity::kTime, 0.0, 24.0 * 3600.0, true};
+  static const ColumnRule command_time_rule{"time", Quantity::kTime, 0.0, 24.0 * 3600.0, true};
   const detail::CsvRow& header = rows.front();
   std::vector<HeaderColumn> columns;
   std::set<std::string, std::less<>> seen;
@@ -225,7 +225,7 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
     const std::string_view bare = detail::trim(raw.substr(0, raw.find('[')));
     const ColumnRule* rule = nullptr;
     if (commands) {
-      if (bare == "time") rule = &kCommandTime;
+      if (bare == "time") rule = &command_time_rule;
     } else {
       for (const ColumnRule& r : schema->columns) {
         if (r.name == bare) rule = &r;

@@ -212,8 +212,9 @@ TEST_F(LineControllerTest, SameInputsGiveBitIdenticalOutputs) {
     image.time_ns += 10'000'000;
     image.takt_beam_broken = (i / 37) % 3 == 0;  // rows arriving irregularly
     image.level_mm = static_cast<float>(i % 90);
-    for (std::size_t d = 0; d < kDriveCount; ++d)
+    for (std::size_t d = 0; d < kDriveCount; ++d) {
       image.drives[d].encoder_counts += 40 + static_cast<std::int64_t>(d);
+    }
     if (i % 4 == 0) {
       test::publish(image, config, CameraId::kOrientation,
                     config.cameras[index(CameraId::kOrientation)].s_mm + static_cast<float>(i % 50),

@@ -707,6 +707,7 @@ LawParameters complete_parameters(const LawInfo<Law>& info, const LawParameters&
 template <typename Map>
 std::vector<std::string> keys_of(const Map& map) {
   std::vector<std::string> names;
+  names.reserve(map.size());
   for (const auto& entry : map) {
     names.push_back(entry.first);
   }

@@ -17,9 +17,9 @@ namespace fl::vision::record {
 namespace {
 
 std::filesystem::path fresh_directory(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("fl_frame_source_" + name + "_" +
-                    std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+  auto dir = std::filesystem::temp_directory_path() /
+             ("fl_frame_source_" + name + "_" +
+              std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;

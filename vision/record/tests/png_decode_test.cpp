@@ -34,7 +34,7 @@ cv::Mat test_image(int rows, int cols, int channels, std::uint64_t seed) {
   return image;
 }
 
-Bytes encode_with_opencv(const cv::Mat& image, std::vector<int> parameters = {}) {
+Bytes encode_with_opencv(const cv::Mat& image, const std::vector<int>& parameters = {}) {
   Bytes png;
   EXPECT_TRUE(cv::imencode(".png", image, png, parameters));
   return png;

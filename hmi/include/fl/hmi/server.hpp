@@ -35,7 +35,7 @@ class HmiServer {
 
   // `status` is read by the server's broadcaster thread only (the buffer's one consumer).
   // `layout` is sent to each page as it connects (layout_to_json). Nothing starts yet.
-  HmiServer(HmiConfig config, TripleBuffer<LineStatus>& status, nlohmann::json layout,
+  HmiServer(HmiConfig config, TripleBuffer<LineStatus>& status, const nlohmann::json& layout,
             HmiCommands commands, ClockNs clock = {});
   ~HmiServer();  // stops
   HmiServer(const HmiServer&) = delete;
