@@ -361,6 +361,28 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
       last_row[key] = k;
     }
   }
+  // Compression is the plate's travel into the sample, positive. A trial that travels the
+  // other way, rising above its first value by less than a tenth of its fall (noise on a
+  // still plate), was most likely recorded with compression negative; run as it stands, the
+  // twin's plate would lift off and answer zero force at every row.
+  const Channel* displacement = table.find("displacement");
+  if (schema != nullptr && schema->type == ExperimentType::kCompress && displacement != nullptr &&
+      table.rows() > 0) {
+    const std::vector<double>& d = displacement->values_si;
+    const auto [lowest, highest] = std::minmax_element(d.begin(), d.end());
+    const double rise = *highest - d.front();
+    const double fall = d.front() - *lowest;
+    if (fall > 0.0 && rise < 0.1 * fall) {
+      const auto lowest_row = static_cast<std::size_t>(lowest - d.begin());
+      problems.add(table.lines[lowest_row], 0,
+                   "displacement falls from its first value (" +
+                       in_unit(d.front(), displacement->unit) + ") to " +
+                       in_unit(*lowest, displacement->unit) + " and rises at most " +
+                       in_unit(rise, displacement->unit) +
+                       " above it: compression is positive in this format; if the machine "
+                       "records it negative, write the column with its sign changed");
+    }
+  }
   if (problems.count() > 0) return std::nullopt;
   return table;
 }

@@ -217,6 +217,26 @@ TEST(Dataset, CellProblemsNameLineAndColumn) {
   }
 }
 
+TEST(Dataset, CompressionWrittenNegativeIsRefusedNotRunAsALiftOff) {
+  const DatasetFolder folder;
+  folder.write("manifest.yaml", manifest("compress", kRate, kOneTrial));
+  // A machine that records compression negative: the plate only ever moves "up". Run as it
+  // stands the twin's plate would leave the sample and answer 0 N at every row.
+  folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,0,0\n1,-0.5,2\n2,-1.5,6\n");
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "a.csv", 4,
+                          "to -1.5 mm and rises at most 0 mm above it: compression is positive"));
+  // The same with 1 um of noise lifting one row above the start: 1 um against a 1.5 mm fall.
+  folder.write("a.csv",
+               "time [s],displacement [mm],force [N]\n0,0,0\n1,0.001,0\n2,-0.5,2\n3,-1.5,6\n");
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "a.csv", 5, "compression is positive"));
+  // An absolute crosshead position that rises from 12.5 mm is compression: loaded.
+  folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,12.5,0\n1,13,2\n2,14,6\n");
+  EXPECT_NO_THROW((void)load_dataset(folder.path()));
+  // A load and unload that dips 1 um below the start on the way back (noise) is loaded too.
+  folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,0,0\n1,1,4\n2,-0.001,0\n");
+  EXPECT_NO_THROW((void)load_dataset(folder.path()));
+}
+
 TEST(Dataset, FileProblems) {
   const DatasetFolder folder;
   folder.write("manifest.yaml", manifest("compress", kRate, kOneTrial));
