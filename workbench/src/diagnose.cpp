@@ -185,6 +185,79 @@ std::size_t held_out_trial(const Dataset& dataset, const std::vector<double>& ba
   return worst;
 }
 
+void rank_candidates(Diagnosis& diagnosis, std::vector<CandidateResult> results,
+                     const DiagnoseOptions& options) {
+  for (CandidateResult& result : results) {
+    result.delta_bic = result.bic - diagnosis.base_bic;
+    const double rmse = std::sqrt(result.rss / static_cast<double>(diagnosis.samples));
+    result.improvement = diagnosis.base_rmse > 0.0 ? 1.0 - rmse / diagnosis.base_rmse : 0.0;
+    const double held_out_gain = diagnosis.base_held_out_rmse > 0.0
+                                     ? 1.0 - result.held_out_rmse / diagnosis.base_held_out_rmse
+                                     : 0.0;
+    result.proposed =
+        result.delta_bic < -options.min_bic_drop && held_out_gain > options.min_held_out_gain;
+  }
+  std::sort(results.begin(), results.end(),
+            [](const CandidateResult& a, const CandidateResult& b) { return a.bic < b.bic; });
+  // Only the best may be proposed: the effects compete to explain the same residual. A
+  // runner-up that would pass on its own and comes within min_bic_drop of the best is named:
+  // the data then cannot tell the two apart (on slide onset angles a resting friction and a
+  // rolling resistance both raise the angle), and the proposal says so.
+  if (results.size() > 1 && results[0].proposed && results[1].proposed &&
+      results[1].bic - results[0].bic < options.min_bic_drop) {
+    diagnosis.indistinct_from = results[1].law;
+    diagnosis.indistinct_bic_gap = results[1].bic - results[0].bic;
+  }
+  for (std::size_t k = 1; k < results.size(); ++k) results[k].proposed = false;
+  diagnosis.ranked = std::move(results);
+}
+
+std::string diagnosis_verdict(const Diagnosis& diagnosis, const DiagnoseOptions& options) {
+  std::ostringstream verdict;
+  verdict.precision(3);
+  if (!diagnosis.ranked.empty() && diagnosis.ranked.front().proposed) {
+    const CandidateResult& best = diagnosis.ranked.front();
+    verdict << best.law << " explains the failure: RMS error falls by " << 100.0 * best.improvement
+            << " % (held-out trial '" << diagnosis.held_out_trial << "' "
+            << diagnosis.base_held_out_rmse << " -> " << best.held_out_rmse << "), BIC by "
+            << -best.delta_bic;
+    if (best.model_spread > 0.0) {
+      verdict << "; the fitted ensemble's own spread is " << best.model_spread
+              << " (RMS), which adds to the noise";
+    }
+    if (!diagnosis.indistinct_from.empty()) {
+      verdict << ". But " << diagnosis.indistinct_from << " explains it nearly as well (BIC only "
+              << diagnosis.indistinct_bic_gap << " higher, under " << options.min_bic_drop
+              << "): this data cannot tell the two apart, so measure under a condition where "
+                 "they differ before trusting either";
+    }
+  } else {
+    // The base model's own misfit in noise sigmas (an ensemble's spread counts as noise).
+    const double floor_si = std::hypot(diagnosis.noise_si, diagnosis.base_model_spread);
+    const bool base_fails = floor_si > 0.0 && diagnosis.base_rmse > 2.0 * floor_si;
+    verdict << (base_fails ? "no candidate explains the failure: base RMS "
+                           : "nothing missing among the candidates: base RMS ")
+            << diagnosis.base_rmse;
+    if (diagnosis.noise_si > 0.0) verdict << " against noise " << diagnosis.noise_si;
+    verdict << "; no effect lowers the BIC by " << options.min_bic_drop
+            << " and the held-out error by " << 100.0 * options.min_held_out_gain << " %";
+    if (base_fails) {
+      verdict << ". The base model is " << diagnosis.base_rmse / floor_si
+              << " noise sigmas off: calibrate its base parameters (linectl calibrate), or check "
+                 "the dataset's conditions, units and signs against docs/measurements.md";
+    }
+  }
+  const double first_pose_spread =
+      std::max(diagnosis.base_first_pose_spread, diagnosis.best_first_pose_spread);
+  if (first_pose_spread > 2.0 * diagnosis.noise_si && diagnosis.noise_si > 0.0) {
+    verdict << ". But the tracks hang on stick or slip: first poses moved within the noise move "
+               "them by "
+            << first_pose_spread << " RMS (" << first_pose_spread / diagnosis.noise_si
+            << " noise sigmas), so one run a trial fits chance; diagnose again with --ensemble 8";
+  }
+  return verdict.str();
+}
+
 Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base,
                    const std::vector<EffectCandidate>& candidates, const DiagnoseOptions& options) {
   const std::string_view channel = judged_channel(dataset.experiment);
@@ -246,21 +319,7 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   for (int t = 0; t < thread_count; ++t) threads.emplace_back(worker);
   for (std::thread& thread : threads) thread.join();
 
-  for (CandidateResult& result : results) {
-    result.delta_bic = result.bic - diagnosis.base_bic;
-    const double rmse = std::sqrt(result.rss / static_cast<double>(diagnosis.samples));
-    result.improvement = diagnosis.base_rmse > 0.0 ? 1.0 - rmse / diagnosis.base_rmse : 0.0;
-    const double held_out_gain = diagnosis.base_held_out_rmse > 0.0
-                                     ? 1.0 - result.held_out_rmse / diagnosis.base_held_out_rmse
-                                     : 0.0;
-    result.proposed =
-        result.delta_bic < -options.min_bic_drop && held_out_gain > options.min_held_out_gain;
-  }
-  std::sort(results.begin(), results.end(),
-            [](const CandidateResult& a, const CandidateResult& b) { return a.bic < b.bic; });
-  // Only the best may be proposed: the effects compete to explain the same residual.
-  for (std::size_t k = 1; k < results.size(); ++k) results[k].proposed = false;
-  diagnosis.ranked = std::move(results);
+  rank_candidates(diagnosis, std::move(results), options);
 
   // Line tracks from one run a trial: would the tracks move if the first poses moved within
   // the noise? A probe ensemble of the base model and of the best fit says.
@@ -288,33 +347,7 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
         diagnosis.base_first_pose_spread, diagnosis.best_first_pose_spread);
   }
 
-  std::ostringstream verdict;
-  verdict.precision(3);
-  if (!diagnosis.ranked.empty() && diagnosis.ranked.front().proposed) {
-    const CandidateResult& best = diagnosis.ranked.front();
-    verdict << best.law << " explains the failure: RMS error falls by " << 100.0 * best.improvement
-            << " % (held-out trial '" << diagnosis.held_out_trial << "' "
-            << diagnosis.base_held_out_rmse << " -> " << best.held_out_rmse << "), BIC by "
-            << -best.delta_bic;
-    if (best.model_spread > 0.0) {
-      verdict << "; the fitted ensemble's own spread is " << best.model_spread
-              << " (RMS), which adds to the noise";
-    }
-  } else {
-    verdict << "nothing missing among the candidates: base RMS " << diagnosis.base_rmse;
-    if (diagnosis.noise_si > 0.0) verdict << " against noise " << diagnosis.noise_si;
-    verdict << "; no effect lowers the BIC by " << options.min_bic_drop
-            << " and the held-out error by " << 100.0 * options.min_held_out_gain << " %";
-  }
-  const double first_pose_spread =
-      std::max(diagnosis.base_first_pose_spread, diagnosis.best_first_pose_spread);
-  if (first_pose_spread > 2.0 * diagnosis.noise_si && diagnosis.noise_si > 0.0) {
-    verdict << ". But the tracks hang on stick or slip: first poses moved within the noise move "
-               "them by "
-            << first_pose_spread << " RMS (" << first_pose_spread / diagnosis.noise_si
-            << " noise sigmas), so one run a trial fits chance; diagnose again with --ensemble 8";
-  }
-  diagnosis.verdict = verdict.str();
+  diagnosis.verdict = diagnosis_verdict(diagnosis, options);
   return diagnosis;
 }
 
@@ -338,6 +371,8 @@ std::string diagnosis_json(const Diagnosis& diagnosis) {
                       {"base_model_spread_si", diagnosis.base_model_spread},
                       {"base_first_pose_spread_si", diagnosis.base_first_pose_spread},
                       {"best_first_pose_spread_si", diagnosis.best_first_pose_spread},
+                      {"indistinct_from", diagnosis.indistinct_from},
+                      {"indistinct_bic_gap", diagnosis.indistinct_bic_gap},
                       {"verdict", diagnosis.verdict}};
   nlohmann::json ranked = nlohmann::json::array();
   for (const CandidateResult& r : diagnosis.ranked) {

@@ -7,6 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <string>
+
 #include "workbench_test_support.hpp"
 
 namespace fl::workbench {
@@ -49,6 +52,85 @@ TEST(Diagnose, RefusesWhatItCannotJudge) {
   const Dataset one_trial = generate_dataset(options).dataset;
   EXPECT_THROW((void)diagnose(one_trial, base_model(), compress_candidates()),
                std::invalid_argument);
+}
+
+// The judgement alone, on fitted figures made by hand (no twin runs). 100 samples, noise 1, a
+// base model 5 noise sigmas off on all trials and on the held-out one.
+Diagnosis base_five_sigmas_off() {
+  Diagnosis diagnosis;
+  diagnosis.samples = 100;
+  diagnosis.noise_si = 1.0;
+  diagnosis.base_rmse = 5.0;
+  diagnosis.base_held_out_rmse = 5.0;
+  diagnosis.base_bic = 100.0 * std::log(25.0);  // n ln(rss / n), no parameters added
+  return diagnosis;
+}
+
+CandidateResult fitted(const std::string& law, double rmse, double held_out_rmse, int parameters) {
+  CandidateResult result;
+  result.law = law;
+  result.rss = 100.0 * rmse * rmse;
+  result.bic = 100.0 * std::log(rmse * rmse) + parameters * std::log(100.0);
+  result.held_out_rmse = held_out_rmse;
+  return result;
+}
+
+TEST(DiagnoseJudgement, ARunnerUpTheDataCannotTellFromTheBestIsNamed) {
+  const DiagnoseOptions options;  // proposal: BIC down by 10, held-out error down by 20 %
+  // Both fall to the noise; the runner-up's two parameters against one cost it ln(100) = 4.6
+  // of BIC, under the 10 that would tell them apart.
+  Diagnosis close = base_five_sigmas_off();
+  rank_candidates(close,
+                  {fitted("rolling_resistance", 1.0, 1.1, 2),
+                   fitted("static_kinetic_friction", 1.0, 1.0, 1), fitted("wet_film", 4.9, 5.0, 1)},
+                  options);
+  ASSERT_EQ(close.ranked.size(), 3U);
+  EXPECT_EQ(close.ranked[0].law, "static_kinetic_friction");
+  EXPECT_TRUE(close.ranked[0].proposed);
+  EXPECT_FALSE(close.ranked[1].proposed);  // only the best is proposed
+  EXPECT_EQ(close.indistinct_from, "rolling_resistance");
+  EXPECT_NEAR(close.indistinct_bic_gap, std::log(100.0), 1e-9);
+  const std::string verdict = diagnosis_verdict(close, options);
+  EXPECT_NE(verdict.find("static_kinetic_friction explains the failure"), std::string::npos);
+  EXPECT_NE(verdict.find("But rolling_resistance explains it nearly as well"), std::string::npos)
+      << verdict;
+  // The runner-up 1.2 sigmas off: 100 ln(1.44) = 36 of BIC behind, told apart, not named.
+  Diagnosis apart = base_five_sigmas_off();
+  rank_candidates(
+      apart,
+      {fitted("rolling_resistance", 1.2, 1.3, 1), fitted("static_kinetic_friction", 1.0, 1.0, 1)},
+      options);
+  EXPECT_TRUE(apart.indistinct_from.empty());
+  EXPECT_EQ(diagnosis_verdict(apart, options).find("nearly as well"), std::string::npos);
+  // A runner-up that would not pass on its own (held-out error down 4 %, not 20 %) is no rival.
+  Diagnosis overfit = base_five_sigmas_off();
+  rank_candidates(
+      overfit,
+      {fitted("rolling_resistance", 1.0, 4.8, 2), fitted("static_kinetic_friction", 1.0, 1.0, 1)},
+      options);
+  EXPECT_TRUE(overfit.indistinct_from.empty());
+}
+
+TEST(DiagnoseJudgement, NothingProposedForABaseModelFarOffTheNoiseIsNotCalledComplete) {
+  const DiagnoseOptions options;
+  // No candidate helps (4.9 sigmas after the fit): the base model still fails.
+  Diagnosis failing = base_five_sigmas_off();
+  rank_candidates(failing, {fitted("bpm_plastic", 4.9, 4.9, 1)}, options);
+  EXPECT_FALSE(failing.ranked[0].proposed);
+  const std::string verdict = diagnosis_verdict(failing, options);
+  EXPECT_EQ(verdict.find("nothing missing"), std::string::npos) << verdict;
+  EXPECT_NE(verdict.find("no candidate explains the failure"), std::string::npos) << verdict;
+  EXPECT_NE(verdict.find("5 noise sigmas off"), std::string::npos) << verdict;
+  // A base model at 1.5 sigmas (under the twice the noise the proof accepts) is complete.
+  Diagnosis fine = base_five_sigmas_off();
+  fine.base_rmse = 1.5;
+  fine.base_held_out_rmse = 1.5;
+  rank_candidates(fine, {fitted("bpm_plastic", 1.49, 1.5, 1)}, options);
+  EXPECT_NE(diagnosis_verdict(fine, options).find("nothing missing"), std::string::npos);
+  // An ensemble's own spread counts as noise: 5 off against a floor of hypot(1, 3) = 3.2 is
+  // 1.6 sigmas, complete.
+  failing.base_model_spread = 3.0;
+  EXPECT_NE(diagnosis_verdict(failing, options).find("nothing missing"), std::string::npos);
 }
 
 }  // namespace

@@ -70,6 +70,11 @@ struct Diagnosis {
   double best_first_pose_spread = 0.0;
   std::string held_out_trial;
   std::vector<CandidateResult> ranked;  // best (lowest BIC) first
+  // When the best is proposed and the runner-up would pass as well with a BIC less than
+  // DiagnoseOptions::min_bic_drop above it: its law and that gap (the data cannot tell them
+  // apart). Empty and 0 otherwise.
+  std::string indistinct_from;
+  double indistinct_bic_gap = 0.0;
   // "bpm_viscoelastic explains it: ..." or "nothing missing: ...".
   std::string verdict;
 };
@@ -105,6 +110,18 @@ std::size_t held_out_trial(const Dataset& dataset, const std::vector<double>& ba
 Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base,
                    const std::vector<EffectCandidate>& candidates,
                    const DiagnoseOptions& options = {});
+
+// diagnose()'s judgement of fitted candidates, given a diagnosis whose base figures (samples,
+// base_rmse, base_bic, base_held_out_rmse) are set: each candidate's BIC change and RMS fall,
+// ranked by BIC, the best proposed when it passes both tests, and indistinct_from set when a
+// runner-up passes too within min_bic_drop of it.
+void rank_candidates(Diagnosis& diagnosis, std::vector<CandidateResult> results,
+                     const DiagnoseOptions& options);
+// The one-paragraph verdict of a ranked diagnosis: what explains the failure, or that nothing
+// does; a base model still beyond twice the noise when nothing is proposed; a runner-up the
+// data cannot tell from the best; a line-track fit that hangs on its first poses.
+[[nodiscard]] std::string diagnosis_verdict(const Diagnosis& diagnosis,
+                                            const DiagnoseOptions& options);
 
 // The proposed effect as a HiddenEffect-style law change of the base model (empty law when
 // nothing is proposed).
