@@ -201,26 +201,22 @@ int diagnose_command(const CompareArgs& args) {
   }
   spdlog::info("{}", diagnosis.verdict);
   const HiddenEffect effect = proposed_effect(diagnosis);
-  const bool contact_effect = inputs->dataset.experiment == ExperimentType::kSlide ||
-                              inputs->dataset.experiment == ExperimentType::kLineTracks;
-  if (!effect.law.empty() && contact_effect) {
-    std::string snippet = "      - law: " + effect.law + "\n";
-    for (const auto& [key, value] : effect.parameters) {
-      snippet += fmt::format("        {}: {:.6g}\n", key, value);
+  if (!effect.law.empty()) {
+    // The whole law list or block as the fitted model has it, so it loads as pasted (a
+    // static_kinetic_friction needs the kinetic coefficient it inherits from the coulomb).
+    const bool contact_effect = inputs->dataset.experiment == ExperimentType::kSlide ||
+                                inputs->dataset.experiment == ExperimentType::kLineTracks;
+    const std::string snippet =
+        effect_config_snippet(inputs->common.base_spec, inputs->dataset.experiment, effect);
+    if (contact_effect) {
+      spdlog::info(
+          "to add it, make this the contact_laws of every fillet-equipment interaction of the "
+          "DEM config (in config/dem.yaml the list anchored &fillet_equipment):\n{}",
+          snippet);
+    } else {
+      spdlog::info("to add it, make this the bond_law of the DEM config:\n{}", snippet);
     }
-    spdlog::info(
-        "to add it, put this in the contact_laws of every fillet-equipment interaction in "
-        "config/dem.yaml (static_kinetic_friction in place of coulomb, with the coulomb's "
-        "friction_coefficient as kinetic_friction_coefficient; wet_film before the friction "
-        "law; rolling_resistance after it):\n{}",
-        snippet);
-  } else if (!effect.law.empty()) {
-    std::string snippet = "    bond_law:\n      law: " + effect.law + "\n";
-    for (const auto& [key, value] : effect.parameters) {
-      snippet += fmt::format("      {}: {:.6g}\n", key, value);
-    }
-    spdlog::info("to add it, change the bond_law in config/dem.yaml (keep its other keys):\n{}",
-                 snippet);
+    std::ofstream(out / "effect.yaml") << snippet;
   }
   spdlog::info("diagnosis: {}", (out / "diagnosis.json").string());
   return 0;

@@ -7,10 +7,12 @@
 #include <numbers>
 #include <random>
 #include <stdexcept>
+#include <string_view>
 
 #include "fl/report/csv.hpp"
 #include "fl/twin/dem/config.hpp"
 #include "fl/workbench/twin_models.hpp"
+#include "text.hpp"
 
 namespace fl::workbench {
 namespace {
@@ -317,6 +319,39 @@ dem::ModelSpec with_experiment_effect(const dem::ModelSpec& base, ExperimentType
   const bool contact =
       experiment == ExperimentType::kSlide || experiment == ExperimentType::kLineTracks;
   return contact ? with_contact_effect(base, effect) : with_bond_effect(base, effect);
+}
+
+std::string effect_config_snippet(const dem::ModelSpec& base, ExperimentType experiment,
+                                  const HiddenEffect& effect) {
+  if (effect.law.empty()) return {};
+  const dem::ModelSpec spec = with_experiment_effect(base, experiment, effect);
+  // Seven significant digits: a fitted value is known to far fewer, and the text stays short.
+  const auto values = [](const dem::LawParameters& parameters, std::string_view separator) {
+    std::string text;
+    for (const auto& [key, value] : parameters) {
+      text += std::string(separator) + key + ": " + detail::significant(value, 7);
+    }
+    return text;
+  };
+  if (experiment == ExperimentType::kSlide || experiment == ExperimentType::kLineTracks) {
+    const std::uint32_t equipment = model_tests::equipment_type(spec);
+    for (const dem::InteractionSpec& interaction : spec.interactions) {
+      if (!model_tests::is_fillet_with(interaction, equipment)) continue;
+      std::string snippet = "    contact_laws:\n";
+      for (const dem::LawSpec& law : interaction.contact_laws) {
+        snippet += "      - {law: " + law.name + values(law.parameters, ", ") + "}\n";
+      }
+      return snippet;
+    }
+    throw std::invalid_argument("the model has no fillet-equipment interaction to add " +
+                                effect.law + " to");
+  }
+  for (const dem::InteractionSpec& interaction : spec.interactions) {
+    if (!interaction.bond_law) continue;
+    return "    bond_law:\n      law: " + interaction.bond_law->name +
+           values(interaction.bond_law->parameters, "\n      ") + "\n";
+  }
+  throw std::invalid_argument("the model has no bond law to change to " + effect.law);
 }
 
 GeneratedDataset generate_dataset(const GeneratorOptions& options) {

@@ -5,8 +5,12 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <set>
+#include <sstream>
+#include <string>
 
+#include "fl/twin/dem/config.hpp"
 #include "workbench_test_support.hpp"
 
 namespace fl::workbench {
@@ -98,6 +102,83 @@ TEST(Generator, RefusesWhatItCannotMake) {
   options.experiment = ExperimentType::kBend;
   options.effect = "bpm_plastic";
   EXPECT_THROW((void)generate_dataset(options), std::invalid_argument);
+}
+
+// The project's config/dem.yaml with the lines after `anchor_line` that start with `indent`
+// (the list or block it opens) replaced by `replacement`, loaded as a user's edited copy.
+std::filesystem::path project_dem_config() {
+  return std::filesystem::path(FL_WORKBENCH_TEST_DATA) / ".." / ".." / ".." / "config" / "dem.yaml";
+}
+
+dem::ModelSpec edited_config(const std::string& anchor_line, const std::string& indent,
+                             const std::string& replacement) {
+  const std::filesystem::path config = project_dem_config();
+  std::ifstream in(config);
+  std::ostringstream out;
+  std::string line;
+  bool replacing = false;
+  bool anchored = false;
+  while (std::getline(in, line)) {
+    if (replacing && line.rfind(indent, 0) == 0) continue;
+    replacing = false;
+    if (line.rfind(anchor_line, 0) == 0) {
+      out << line << "\n" << replacement;
+      replacing = anchored = true;
+      continue;
+    }
+    out << line << "\n";
+  }
+  EXPECT_TRUE(anchored) << anchor_line << " not in " << config;
+  const auto edited = std::filesystem::temp_directory_path() / "fl_effect_snippet_dem.yaml";
+  std::ofstream(edited) << out.str();
+  return dem::load_model_spec(edited);
+}
+
+// The snippet without its first line (the key it sits under, kept with its anchor).
+std::string body(const std::string& snippet) { return snippet.substr(snippet.find('\n') + 1); }
+
+void expect_same_laws(const dem::LawSpec& loaded, const dem::LawSpec& fitted) {
+  EXPECT_EQ(loaded.name, fitted.name);
+  ASSERT_EQ(loaded.parameters.size(), fitted.parameters.size()) << fitted.name;
+  for (const auto& [key, value] : fitted.parameters) {
+    // Written to seven significant digits.
+    EXPECT_NEAR(loaded.parameters.at(key), value, 1e-6 * std::abs(value)) << key;
+  }
+}
+
+TEST(EffectConfigSnippet, PastedAsPrintedItLoadsAsTheFittedModel) {
+  const dem::ModelSpec base = dem::load_model_spec(project_dem_config());
+  // A static friction as diagnose fits it: no kinetic coefficient, which the law requires and
+  // the model inherits from the coulomb it replaces (0.5 in config/dem.yaml, appendix B).
+  const HiddenEffect friction{
+      "static_kinetic_friction",
+      {{"static_friction_coefficient", 0.6368}, {"stick_speed_m_per_s", 0.0283}}};
+  const std::string contact = effect_config_snippet(base, ExperimentType::kSlide, friction);
+  EXPECT_NE(contact.find("kinetic_friction_coefficient: 0.5"), std::string::npos) << contact;
+  const dem::ModelSpec fitted = with_contact_effect(base, friction);
+  const dem::ModelSpec pasted =
+      edited_config("    contact_laws: &fillet_equipment", "      - ", body(contact));
+  ASSERT_EQ(pasted.interactions.size(), fitted.interactions.size());
+  for (std::size_t k = 0; k < fitted.interactions.size(); ++k) {
+    const auto& a = pasted.interactions[k].contact_laws;
+    const auto& b = fitted.interactions[k].contact_laws;
+    ASSERT_EQ(a.size(), b.size()) << "interaction " << k;
+    for (std::size_t l = 0; l < b.size(); ++l) expect_same_laws(a[l], b[l]);
+  }
+
+  const HiddenEffect plastic{"bpm_plastic", {{"normal_yield_strength_pa", 309.2}}};
+  const std::string bond = effect_config_snippet(base, ExperimentType::kCompress, plastic);
+  const dem::ModelSpec fitted_bond = with_bond_effect(base, plastic);
+  const dem::ModelSpec pasted_bond = edited_config("    bond_law:", "      ", body(bond));
+  for (std::size_t k = 0; k < fitted_bond.interactions.size(); ++k) {
+    ASSERT_EQ(pasted_bond.interactions[k].bond_law.has_value(),
+              fitted_bond.interactions[k].bond_law.has_value());
+    if (fitted_bond.interactions[k].bond_law) {
+      expect_same_laws(*pasted_bond.interactions[k].bond_law,
+                       *fitted_bond.interactions[k].bond_law);
+    }
+  }
+  EXPECT_TRUE(effect_config_snippet(base, ExperimentType::kSlide, {}).empty());
 }
 
 }  // namespace

@@ -15,26 +15,25 @@ run dataset generate --experiment drop --effect bpm_plastic --seed 41 --out "$wo
 run compare "$work/drop" --dem-config "$dem_config" --out "$work/compare"
 run diagnose "$work/drop" --dem-config "$dem_config" --out "$work/diagnose"
 
-# The proposed effect from diagnosis.json, as the bond_law lines diagnose prints.
-proposal=$(python3 - "$work/diagnose/diagnosis.json" <<'PY'
+# The proposed effect from diagnosis.json.
+law=$(python3 - "$work/diagnose/diagnosis.json" <<'PY'
 import json, sys
 ranked = json.load(open(sys.argv[1]))["ranked"]
 proposed = [r for r in ranked if r["proposed"]]
-if proposed:
-    print(proposed[0]["law"])
-    for key, value in proposed[0]["fitted"].items():
-        print(f"      {key}: {value:.9g}")
+print(proposed[0]["law"] if proposed else "")
 PY
 )
-law=$(printf '%s\n' "$proposal" | head -1)
 [ "$law" = bpm_plastic ] || fail "diagnose proposed '${law}', the hidden effect is bpm_plastic"
-grep -q "to add it, change the bond_law" "$work/log.txt" || fail "diagnose did not say how to add it"
+grep -q "to add it, make this the bond_law" "$work/log.txt" || fail "diagnose did not say how to add it"
+snippet="$work/diagnose/effect.yaml"
+[ -s "$snippet" ] || fail "diagnose wrote no $snippet"
 
-# The config change: the bond law renamed, the fitted parameters added below it.
-params=$(printf '%s\n' "$proposal" | tail -n +2)
-awk -v law="$law" -v params="$params" \
-  '/^      law: bpm$/ { print "      law: " law; print params; next } { print }' \
-  "$dem_config" >"$work/dem.yaml"
+# The config change as a user makes it: the bond_law block replaced by the one diagnose wrote.
+awk -v snippet="$snippet" '
+  replacing && /^      / { next }
+  { replacing = 0 }
+  /^    bond_law:/ { while ((getline line < snippet) > 0) print line; replacing = 1; next }
+  { print }' "$dem_config" >"$work/dem.yaml"
 grep -q "law: bpm_plastic" "$work/dem.yaml" || fail "the bond law was not found in $dem_config"
 run compare "$work/drop" --dem-config "$work/dem.yaml" --out "$work/compare"
 

@@ -89,6 +89,15 @@ dem::ModelSpec with_contact_effect(const dem::ModelSpec& base, const HiddenEffec
 dem::ModelSpec with_experiment_effect(const dem::ModelSpec& base, ExperimentType experiment,
                                       const HiddenEffect& effect);
 
+// What to paste into the DEM config (config/dem.yaml's layout) to add an effect as
+// with_experiment_effect does: for a contact effect the whole resulting `contact_laws:` list of
+// a fillet-equipment interaction (the replaced or inherited parameters written out, so the
+// text loads as it is); for a bond effect the whole `bond_law:` block. Empty for no effect;
+// throws std::invalid_argument when the model has no such interaction.
+[[nodiscard]] std::string effect_config_snippet(const dem::ModelSpec& base,
+                                                ExperimentType experiment,
+                                                const HiddenEffect& effect);
+
 // Writes the dataset in the measurement format (manifest.yaml and one CSV per trial).
 void write_dataset(const Dataset& dataset, const std::filesystem::path& folder);
 void write_truth(const HiddenEffect& truth, const std::filesystem::path& file);
