@@ -8,6 +8,7 @@
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "fl/workbench/history.hpp"
 #include "fl/workbench/report.hpp"
@@ -94,6 +95,33 @@ TEST(Compare, PhasesFollowTheDisplacementRate) {
   EXPECT_EQ(phase[12], "hold");       // 6 s: both neighbours at 5 mm
   EXPECT_EQ(phase[17], "unloading");  // 8.5 s
   EXPECT_EQ(phases_of(ExperimentType::kSlide, trial)[4], "all");
+}
+
+TEST(Compare, PhasesHoldUnderAFastLoggersDisplacementNoise) {
+  // 10 kHz: loading at 1 mm/s for 5 s, then a 1 s hold, with 0.5 um of displacement noise.
+  // From neighbouring rows the noise alone gives rates of 0.5 um * sqrt(2) / 0.2 ms = 3.5 mm/s,
+  // above the loading rate: rows flickered between loading, unloading and hold.
+  Trial trial;
+  std::vector<double> t, d;
+  std::mt19937 random(7);
+  std::normal_distribution<double> noise_m(0.0, 0.5e-6);
+  for (int k = 0; k <= 60000; ++k) {
+    const double time = 1e-4 * k;
+    t.push_back(time);
+    d.push_back(1e-3 * std::min(time, 5.0) + noise_m(random));
+  }
+  trial.data.channels = {channel("time", "s", t), channel("displacement", "mm", d)};
+  trial.data.lines.resize(t.size());
+  const std::vector<std::string> phase = phases_of(ExperimentType::kCompress, trial);
+  ASSERT_EQ(phase.size(), t.size());
+  // The rate is taken over 1 % of the 6 s either side: rows within 60 ms of the end of the
+  // loading may read either way; every other row has its own phase.
+  int wrong = 0;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    if (std::abs(t[k] - 5.0) <= 0.06) continue;
+    wrong += phase[k] != (t[k] < 5.0 ? "loading" : "hold") ? 1 : 0;
+  }
+  EXPECT_EQ(wrong, 0);
 }
 
 TEST(Compare, ConstantOffsetGivesExactErrorAndScore) {
