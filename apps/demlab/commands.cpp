@@ -348,7 +348,20 @@ Summary run_slide(const Context& context) {
   table.write(out(context, "slide.csv"));
   Plot plot;
   plot.title = "Slide test: slide angle against friction coefficient";
-  plot.x.label = "friction coefficient fillet-steel (-)";
+  // With static_kinetic_friction in the fillet-steel chain the swept mu is the static one
+  // (the onset, so atan(mu) stays the reference), mu_k following at its configured ratio.
+  const dem::ModelSpec spec = model_tests::make_spec(c.slide.common);
+  const std::uint32_t equipment = model_tests::equipment_type(spec);
+  const bool static_kinetic = std::ranges::any_of(spec.interactions, [&](const auto& i) {
+    return model_tests::is_fillet_with(i, equipment) &&
+           std::ranges::any_of(i.contact_laws, [](const auto& law) {
+             return law.name == "static_kinetic_friction";
+           });
+  });
+  plot.x.label = static_kinetic
+                     ? "static friction coefficient mu_s fillet-steel (mu_k at the configured "
+                       "mu_k / mu_s) (-)"
+                     : "friction coefficient fillet-steel (-)";
   plot.y.label = "slide angle (deg)";
   for (auto* s : {&flexible, &rigid, &rigid_dry, &coulomb}) {
     if (!s->x.empty()) plot.series.push_back(*s);

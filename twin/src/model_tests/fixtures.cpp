@@ -10,6 +10,7 @@
 #include <mutex>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
 #include "fl/twin/dem/config.hpp"
@@ -33,11 +34,46 @@ dem::ModelSpec make_spec(const CommonParams& common) {
   return spec;
 }
 
+namespace {
+
+// The bond-law parameters the model tests' stiffness settings act on. Every bpm-family law of
+// the library (bpm, bpm_graded, bpm_viscoelastic, bpm_plastic) has the first two; grading
+// multiplies them bond by bond, so setting them sets the graded law's stiffness at its
+// reference thickness, and the plastic law's yield is a stress, left as it is (as the
+// strengths).
+const std::string kNormalStiffness = "normal_stiffness_n_per_m3";
+const std::string kShearStiffness = "shear_stiffness_n_per_m3";
+// bpm_viscoelastic's Maxwell arm, in the normal direction beside the normal spring. It follows
+// the normal stiffness by the same factor (k_m / k_n and the relaxation time kept): a "stiffer
+// bond" is then the same standard linear solid scaled, both its relaxed stiffness k_n and its
+// instantaneous one k_n + k_m by the factor, with the same relaxation in time.
+const std::string kRelaxationStiffness = "relaxation_stiffness_n_per_m3";
+const std::string kStiffnessUnit = "N/m^3";
+
+bool has_bond_stiffness(const dem::LawParameters& parameters) {
+  return parameters.contains(kNormalStiffness) && parameters.contains(kShearStiffness);
+}
+
+std::string type_name(const dem::ModelSpec& spec, std::uint32_t type) {
+  return type < spec.types.size() ? "'" + spec.types[type].name + "'"
+                                  : "type " + std::to_string(type);
+}
+
+bool is_fillet_interaction(const dem::InteractionSpec& interaction,
+                           std::optional<std::uint32_t> other_type) {
+  if (interaction.type_a > dem::kFilletTypeB && interaction.type_b > dem::kFilletTypeB) {
+    return false;
+  }
+  return !other_type || is_fillet_with(interaction, *other_type);
+}
+
+}  // namespace
+
 Stiffness spec_stiffness(const dem::ModelSpec& spec) {
   for (const auto& interaction : spec.interactions) {
-    if (interaction.bond_law && interaction.bond_law->name == "bpm") {
+    if (interaction.bond_law && has_bond_stiffness(interaction.bond_law->parameters)) {
       const auto& p = interaction.bond_law->parameters;
-      return {p.at("normal_stiffness_n_per_m3"), p.at("shear_stiffness_n_per_m3")};
+      return {p.at(kNormalStiffness), p.at(kShearStiffness)};
     }
   }
   return {};
@@ -53,15 +89,48 @@ double spec_disk_scale(const dem::ModelSpec& spec) {
   return 1.0;
 }
 
-void set_bond_stiffness(dem::ModelSpec& spec, const Stiffness& stiffness) {
+void set_bond_stiffness(dem::ModelSpec& spec, const Stiffness& stiffness,
+                        const dem::LawRegistry& registry) {
   for (auto& interaction : spec.interactions) {
     if (!interaction.bond_law) continue;
-    if (interaction.bond_law->name != "bpm") {
-      throw std::invalid_argument("model tests: bond law '" + interaction.bond_law->name +
-                                  "' has no bpm stiffness");
+    dem::LawSpec& law = *interaction.bond_law;
+    const auto refusal = [&](const std::string& why) {
+      return std::invalid_argument("model tests: bond law '" + law.name + "' between " +
+                                   type_name(spec, interaction.type_a) + " and " +
+                                   type_name(spec, interaction.type_b) + " " + why);
+    };
+    const dem::LawInfo<dem::BondLaw>* info = registry.find_bond_law(law.name);
+    if (info == nullptr) {
+      throw refusal("is not in the law library: no stiffness the tests could set");
     }
-    interaction.bond_law->parameters["normal_stiffness_n_per_m3"] = stiffness.normal_n_per_m3;
-    interaction.bond_law->parameters["shear_stiffness_n_per_m3"] = stiffness.shear_n_per_m3;
+    bool normal = false;
+    bool shear = false;
+    for (const auto& parameter : info->parameters) {
+      if (parameter.name == kNormalStiffness) {
+        normal = true;
+      } else if (parameter.name == kShearStiffness) {
+        shear = true;
+      } else if (parameter.unit == kStiffnessUnit && parameter.name != kRelaxationStiffness) {
+        throw refusal("has a stiffness '" + parameter.name +
+                      "' that the model tests do not know how to scale with the bond stiffness");
+      }
+    }
+    if (!normal || !shear) {
+      throw refusal("has no " + kNormalStiffness + " and " + kShearStiffness +
+                    ": its bonds have no normal and shear stiffness for the model tests' stiffness "
+                    "settings (bend stiffness_factors, impact and DOE stiffness sets) to set");
+    }
+    const auto relaxation = law.parameters.find(kRelaxationStiffness);
+    if (relaxation != law.parameters.end()) {
+      const auto old_normal = law.parameters.find(kNormalStiffness);
+      if (old_normal == law.parameters.end() || !(old_normal->second > 0.0)) {
+        throw refusal("has no positive " + kNormalStiffness + " to scale " + kRelaxationStiffness +
+                      " with");
+      }
+      relaxation->second *= stiffness.normal_n_per_m3 / old_normal->second;
+    }
+    law.parameters[kNormalStiffness] = stiffness.normal_n_per_m3;
+    law.parameters[kShearStiffness] = stiffness.shear_n_per_m3;
   }
 }
 
@@ -76,8 +145,7 @@ void set_contact_parameter(dem::ModelSpec& spec, const std::string& law, const s
                            double value, std::optional<std::uint32_t> other_type) {
   bool found = false;
   for (auto& interaction : spec.interactions) {
-    if (interaction.type_a > dem::kFilletTypeB && interaction.type_b > dem::kFilletTypeB) continue;
-    if (other_type && !is_fillet_with(interaction, *other_type)) continue;
+    if (!is_fillet_interaction(interaction, other_type)) continue;
     for (auto& spec_of_law : interaction.contact_laws) {
       if (spec_of_law.name == law) {
         spec_of_law.parameters[key] = value;
@@ -87,6 +155,51 @@ void set_contact_parameter(dem::ModelSpec& spec, const std::string& law, const s
   }
   if (!found) {
     throw std::invalid_argument("model tests: no contact law '" + law + "' to set '" + key + "'");
+  }
+}
+
+void set_friction_coefficient(dem::ModelSpec& spec, double mu,
+                              std::optional<std::uint32_t> other_type) {
+  bool found = false;
+  for (auto& interaction : spec.interactions) {
+    if (!is_fillet_interaction(interaction, other_type)) continue;
+    found = true;
+    const std::string pair =
+        type_name(spec, interaction.type_a) + "-" + type_name(spec, interaction.type_b);
+    // Every friction law of the chain takes mu (a second one would otherwise cap the sweep).
+    bool has_friction = false;
+    for (auto& law : interaction.contact_laws) {
+      auto& p = law.parameters;
+      if (law.name == "coulomb") {
+        p["friction_coefficient"] = mu;
+        has_friction = true;
+      } else if (law.name == "static_kinetic_friction") {
+        // mu is the static coefficient, the one that decides when a resting body starts to
+        // slide (atan(mu_s) on an incline); the kinetic one keeps its configured ratio to it,
+        // so the law's mu_k <= mu_s holds at every mu.
+        const auto mu_s = p.find("static_friction_coefficient");
+        const auto mu_k = p.find("kinetic_friction_coefficient");
+        if (mu_s == p.end() || mu_k == p.end()) {
+          throw std::invalid_argument("model tests: static_kinetic_friction of " + pair +
+                                      " needs static_ and kinetic_friction_coefficient");
+        }
+        const double kinetic_share = mu_s->second > 0.0 ? mu_k->second / mu_s->second : 1.0;
+        mu_s->second = mu;
+        mu_k->second = kinetic_share * mu;
+        has_friction = true;
+      }
+    }
+    if (!has_friction) {
+      throw std::invalid_argument(
+          "model tests: the contact laws of " + pair +
+          " have no friction law (coulomb or static_kinetic_friction) to take the friction "
+          "coefficient");
+    }
+  }
+  if (!found) {
+    throw std::invalid_argument("model tests: no interaction of a fillet type" +
+                                (other_type ? " with " + type_name(spec, *other_type) : "") +
+                                " to set the friction coefficient on");
   }
 }
 

@@ -13,8 +13,7 @@ SlideResult run_slide(const SlideParams& params) {
   if (params.rigid) common.stiffness = params.rigid_stiffness;
   dem::ModelSpec spec = make_spec(common);
   const std::uint32_t equipment = equipment_type(spec);
-  set_contact_parameter(spec, "coulomb", "friction_coefficient", params.friction_coefficient,
-                        equipment);
+  set_friction_coefficient(spec, params.friction_coefficient, equipment);
   set_contact_parameter(spec, "jkr", "surface_energy_j_per_m2", params.surface_energy_j_per_m2,
                         equipment);
   const dem::FilletTemplate fillet = make_fillet(common);

@@ -8,6 +8,9 @@
 #include <iostream>
 #include <numbers>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "fl/controller/yaml_reader.hpp"
 #include "fl/twin/dem/config.hpp"
@@ -25,6 +28,31 @@ CommonParams fast_common() {
   common.sub_particle_radius_m = 0.007;
   common.variant = 2;  // 172 x 72 x 32 mm, the nominal fillet
   return common;
+}
+
+// config/dem.yaml with its fillet bond law (bpm, appendix B) replaced by an effect-library bond
+// law: the appendix-B stiffnesses and strengths kept, the law's own parameters added.
+dem::ModelSpec with_bond_law(dem::ModelSpec spec, const std::string& law,
+                             const dem::LawParameters& own) {
+  for (auto& interaction : spec.interactions) {
+    if (!interaction.bond_law) continue;
+    interaction.bond_law->name = law;
+    interaction.bond_law->parameters.insert(own.begin(), own.end());
+  }
+  return spec;
+}
+
+// The effect library's bond laws with parameters that leave the bend a bend: the graded law's
+// reference, 25 mm, is the nominal fillet's rear-third bond thickness (21 mm in the tip third,
+// docs/twin.md), so with exponent 1 its grading moves stiffness by tens of per cent; the Maxwell
+// arm is half the normal spring and relaxes in 50 ms, well inside the 1 s run; the yield stress (1
+// MPa) is far above a hanging fillet's bond stresses (its weight, ~4 N, over a few cm^2 of bonds:
+// tens of kPa), so the plastic law stays elastic and "stiffer bends less" still holds for it.
+std::vector<std::pair<std::string, dem::LawParameters>> effect_bond_laws() {
+  return {
+      {"bpm_graded", {{"reference_thickness_m", 0.025}, {"thickness_exponent", 1.0}}},
+      {"bpm_viscoelastic", {{"relaxation_stiffness_n_per_m3", 5e5}, {"relaxation_time_s", 0.05}}},
+      {"bpm_plastic", {{"normal_yield_strength_pa", 1e6}}}};
 }
 
 // ---------------------------------------------------------------- compression
@@ -99,6 +127,31 @@ TEST(ModelTestsSlide, FlexibleAngleRisesWithFriction) {
     std::cout << "flexible mu " << mu << ": " << *result.slide_angle_deg << " deg\n";
     EXPECT_GT(*result.slide_angle_deg, previous + 2.0) << "mu " << mu;  // clearly above
     previous = *result.slide_angle_deg;
+  }
+}
+
+// The slide test on a chain whose friction law is static_kinetic_friction (in place of
+// coulomb): the swept coefficient is the static one, so a solid fillet without adhesion starts
+// to slide at atan(mu) as with coulomb (same bounds and reasons as above), while the kinetic one
+// follows at the configured ratio mu_k / mu_s = 0.4 / 0.5 = 0.8 (a clearly lower sliding
+// friction; at mu 0.6 the law then runs with mu_s 0.6, mu_k 0.48). Had the sweep set mu_k
+// instead (mu_s = mu / 0.8), mu 0.6 would hold to atan(0.75) = 36.9 degrees, above the bound.
+TEST(ModelTestsSlide, StaticKineticFrictionSweepsTheStaticCoefficient) {
+  for (const double mu : {0.3, 0.6}) {  // as the coulomb test above
+    SlideParams params = fast_slide(mu, true);
+    for (auto& interaction : params.common.base_spec.interactions) {
+      for (auto& law : interaction.contact_laws) {
+        if (law.name != "coulomb") continue;
+        law = {"static_kinetic_friction",
+               {{"static_friction_coefficient", 0.5}, {"kinetic_friction_coefficient", 0.4}}};
+      }
+    }
+    const SlideResult result = run_slide(params);
+    ASSERT_TRUE(result.slide_angle_deg.has_value()) << "mu " << mu;
+    std::cout << "rigid static/kinetic mu_s " << mu << ": " << *result.slide_angle_deg
+              << " deg (atan " << std::atan(mu) * kDeg << ")\n";
+    EXPECT_GE(*result.slide_angle_deg, std::atan(mu) * kDeg - 0.5) << "mu " << mu;
+    EXPECT_LE(*result.slide_angle_deg, std::atan(mu) * kDeg + 3.0) << "mu " << mu;
   }
 }
 
@@ -188,6 +241,32 @@ TEST(ModelTestsBend, RestDampingEndsAtRestInsideTheUndampedSwing) {
   EXPECT_NEAR(resting_faster.angle_deg, resting.angle_deg, 1.0);
   params.rest_damping_per_s = -1.0;
   EXPECT_THROW((void)run_bend(params), std::invalid_argument);
+}
+
+// demlab bend's stiffness sweep on every bond law of the effect library, as demlab runs it:
+// the factors multiply the spec's own stiffness (spec_stiffness). Same setup and bounds as
+// AngleFiniteAndFallsWithStiffness (5 mm, 1 s; x1 bends between 10 and 180 degrees, x100 at
+// least 5 degrees less).
+TEST(ModelTestsBend, StiffnessSweepRunsOnEveryBondLawOfTheLibrary) {
+  for (const auto& [law, own] : effect_bond_laws()) {
+    BendParams params;
+    params.common = fast_common();
+    params.common.base_spec = with_bond_law(params.common.base_spec, law, own);
+    params.common.sub_particle_radius_m = 0.005;  // as above: a tip of more than one layer
+    params.duration_s = 1.0;
+    const Stiffness base = spec_stiffness(make_spec(params.common));
+    std::vector<double> angles;
+    for (const double factor : {1.0, 100.0}) {
+      params.common.stiffness =
+          Stiffness{factor * base.normal_n_per_m3, factor * base.shear_n_per_m3};
+      angles.push_back(run_bend(params).angle_deg);
+    }
+    std::cout << "bend " << law << ": x1 " << angles[0] << " deg, x100 " << angles[1] << " deg\n";
+    ASSERT_TRUE(std::isfinite(angles[0])) << law;
+    EXPECT_GT(angles[0], 10.0) << law;
+    EXPECT_LT(angles[0], 180.0) << law;
+    EXPECT_LT(angles[1], angles[0] - 5.0) << law;
+  }
 }
 
 // ---------------------------------------------------------------- stability

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "fl/twin/dem/fillet_template.hpp"
+#include "fl/twin/dem/laws.hpp"
 #include "fl/twin/dem/simulation.hpp"
 #include "fl/twin/model_tests/fillet_source.hpp"
 
@@ -21,7 +22,8 @@ namespace fl::model_tests {
 
 using dem::Vec3;
 
-// Bond stiffnesses of the bpm law (thesis eqs. 3.4-3.5; appendix B: 1e6 / 6e4 N/m^3).
+// Bond stiffnesses of the bpm law (thesis eqs. 3.4-3.5; appendix B: 1e6 / 6e4 N/m^3), and of
+// its effect-library variants (set_bond_stiffness).
 struct Stiffness {
   double normal_n_per_m3 = 1e6;
   double shear_n_per_m3 = 6e4;
@@ -41,19 +43,32 @@ struct CommonParams {
   double bond_step_fraction = 0.2;
   int thread_count = 1;                // engine threads of one simulation
   std::uint32_t seed = 1;              // random drop orientations
-  std::optional<Stiffness> stiffness;  // bpm stiffness; empty: the base spec's
+  std::optional<Stiffness> stiffness;  // bond stiffness; empty: the base spec's
 };
 
 // The base spec with the stiffness applied to every bond law, walls removed, threads set.
 dem::ModelSpec make_spec(const CommonParams& common);
-// Stiffness of the first bond law in the spec (appendix B when there is none).
+// Stiffness of the first bond law in the spec that has one (appendix B when there is none).
 Stiffness spec_stiffness(const dem::ModelSpec& spec);
 double spec_disk_scale(const dem::ModelSpec& spec);
-void set_bond_stiffness(dem::ModelSpec& spec, const Stiffness& stiffness);
+// Sets the normal and shear stiffness of every bond law in the spec: bpm and each effect
+// variant (bpm_graded: its stiffness at the reference thickness; bpm_viscoelastic: its Maxwell
+// arm's stiffness scaled by the same factor as the normal one; bpm_plastic: its yield stress
+// kept). Throws std::invalid_argument naming a law that has no such stiffness, or another
+// stiffness it would not know how to scale (looked up in `registry`).
+void set_bond_stiffness(dem::ModelSpec& spec, const Stiffness& stiffness,
+                        const dem::LawRegistry& registry = dem::LawRegistry::builtin());
 // Sets a contact-law parameter (e.g. coulomb friction_coefficient) on every interaction of a
 // fillet type with `other_type` (std::nullopt: with every type).
 void set_contact_parameter(dem::ModelSpec& spec, const std::string& law, const std::string& key,
                            double value, std::optional<std::uint32_t> other_type);
+// Sets the friction coefficient of the friction laws in the contact laws of every interaction
+// of a fillet type with `other_type` (std::nullopt: with every type): coulomb's
+// friction_coefficient, and static_kinetic_friction's static coefficient with the kinetic one
+// kept at its configured ratio mu_k / mu_s. Throws std::invalid_argument naming the types of an
+// interaction without a friction law.
+void set_friction_coefficient(dem::ModelSpec& spec, double mu,
+                              std::optional<std::uint32_t> other_type);
 std::uint32_t equipment_type(const dem::ModelSpec& spec);
 // Whether the interaction is between a fillet type and `other_type`.
 bool is_fillet_with(const dem::InteractionSpec& interaction, std::uint32_t other_type);

@@ -113,9 +113,12 @@ struct SlideParams {
   double plate_thickness_m = 0.01;
   double tilt_rate_deg_per_s = 5.0;
   double max_angle_deg = 70.0;
-  double settle_s = 0.3;                   // flat plate before tilting
-  double slide_distance_m = 0.01;          // centroid travel along the plate that counts as sliding
-  double friction_coefficient = 0.5;       // fillet-equipment Coulomb mu (appendix B: 0.5)
+  double settle_s = 0.3;           // flat plate before tilting
+  double slide_distance_m = 0.01;  // centroid travel along the plate that counts as sliding
+  // Fillet-equipment friction (appendix B: 0.5): coulomb's mu or, where the chain has
+  // static_kinetic_friction instead, its static mu_s (the onset: atan(mu_s) on an incline) with
+  // mu_k kept at the configured mu_k / mu_s (set_friction_coefficient).
+  double friction_coefficient = 0.5;
   double surface_energy_j_per_m2 = 0.055;  // fillet-equipment JKR (appendix B: 0.055)
   // Solid fillet: sphere rotation locked and these stiff bonds (thesis figure 4.6 "solid").
   bool rigid = false;
