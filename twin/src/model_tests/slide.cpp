@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <string>
 
 #include "fl/twin/model_tests/model_tests.hpp"
 
@@ -14,8 +16,23 @@ SlideResult run_slide(const SlideParams& params) {
   dem::ModelSpec spec = make_spec(common);
   const std::uint32_t equipment = equipment_type(spec);
   set_friction_coefficient(spec, params.friction_coefficient, equipment);
-  set_contact_parameter(spec, "jkr", "surface_energy_j_per_m2", params.surface_energy_j_per_m2,
-                        equipment);
+  // A model without adhesion has no jkr in the chain: it slides at zero surface energy, and
+  // only a sweep that asks for adhesion needs one.
+  const bool has_jkr = std::any_of(
+      spec.interactions.begin(), spec.interactions.end(), [&](const dem::InteractionSpec& i) {
+        return is_fillet_with(i, equipment) &&
+               std::any_of(i.contact_laws.begin(), i.contact_laws.end(),
+                           [](const dem::LawSpec& law) { return law.name == "jkr"; });
+      });
+  if (has_jkr) {
+    set_contact_parameter(spec, "jkr", "surface_energy_j_per_m2", params.surface_energy_j_per_m2,
+                          equipment);
+  } else if (params.surface_energy_j_per_m2 != 0.0) {
+    throw std::invalid_argument(
+        "slide: the fillet-equipment contact laws have no jkr to take a surface energy of " +
+        std::to_string(params.surface_energy_j_per_m2) +
+        " J/m^2; add one after hertz_mindlin, or slide at 0");
+  }
   const dem::FilletTemplate fillet = make_fillet(common);
   // Plate top at z = 0 through the pivot (origin), long along x; tilting about +y lowers +x.
   spec.meshes.push_back(box_wall(

@@ -155,6 +155,23 @@ TEST(ModelTestsSlide, StaticKineticFrictionSweepsTheStaticCoefficient) {
   }
 }
 
+// A model without adhesion (no jkr between fillet and plate) slides as the jkr at zero
+// energy does: the solid fillet at atan(0.3) within the bounds above. Asking it for adhesion
+// is refused, not answered without it.
+TEST(ModelTestsSlide, AChainWithoutAdhesionSlidesAndRefusesASurfaceEnergy) {
+  SlideParams params = fast_slide(0.3, true);
+  for (auto& interaction : params.common.base_spec.interactions) {
+    std::erase_if(interaction.contact_laws,
+                  [](const dem::LawSpec& law) { return law.name == "jkr"; });
+  }
+  const SlideResult result = run_slide(params);
+  ASSERT_TRUE(result.slide_angle_deg.has_value());
+  EXPECT_GE(*result.slide_angle_deg, std::atan(0.3) * kDeg - 0.5);
+  EXPECT_LE(*result.slide_angle_deg, std::atan(0.3) * kDeg + 3.0);
+  params.surface_energy_j_per_m2 = 0.055;  // appendix B's
+  EXPECT_THROW((void)run_slide(params), std::invalid_argument);
+}
+
 // ---------------------------------------------------------------- settle
 
 SettleParams fast_settle() {
