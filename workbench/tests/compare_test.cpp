@@ -114,14 +114,47 @@ TEST(Compare, PhasesHoldUnderAFastLoggersDisplacementNoise) {
   trial.data.lines.resize(t.size());
   const std::vector<std::string> phase = phases_of(ExperimentType::kCompress, trial);
   ASSERT_EQ(phase.size(), t.size());
-  // The rate is taken over 1 % of the 6 s either side: rows within 60 ms of the end of the
-  // loading may read either way; every other row has its own phase.
+  // The window is sized from the noise (here about +-35 ms, so the rate's noise is 1 % of the
+  // loading rate): rows within 60 ms of the end of the loading may read either way; every
+  // other row has its own phase.
   int wrong = 0;
   for (std::size_t k = 0; k < t.size(); ++k) {
     if (std::abs(t[k] - 5.0) <= 0.06) continue;
     wrong += phase[k] != (t[k] < 5.0 ? "loading" : "hold") ? 1 : 0;
   }
   EXPECT_EQ(wrong, 0);
+}
+
+TEST(Compare, PhasesKeepAShortRampBeforeALongHold) {
+  // A relaxation test at 100 Hz: 1 s of loading at 1 mm/s, then 100 s of hold, clean and with
+  // 0.5 um of noise. A window of a fixed share of the test (1 s at 1 %) labelled the whole ramp
+  // by its hold; one sized from the noise keeps it: only the row at the corner may read either
+  // way.
+  for (const double noise_um : {0.0, 0.5}) {
+    SCOPED_TRACE(noise_um);
+    Trial trial;
+    std::vector<double> t, d;
+    std::mt19937 random(11);
+    std::normal_distribution<double> noise_m(0.0, noise_um * 1e-6);
+    for (int k = 0; k <= 10100; ++k) {
+      const double time = 0.01 * k;
+      t.push_back(time);
+      d.push_back(1e-3 * std::min(time, 1.0) + (noise_um > 0.0 ? noise_m(random) : 0.0));
+    }
+    trial.data.channels = {channel("time", "s", t), channel("displacement", "mm", d)};
+    trial.data.lines.resize(t.size());
+    const std::vector<std::string> phase = phases_of(ExperimentType::kCompress, trial);
+    ASSERT_EQ(phase.size(), t.size());
+    int wrong = 0;
+    // With noise the window is about +-70 ms (sqrt(2) 0.5 um / (2 x 1 % x 1 mm/s)): rows
+    // within 0.1 s of the corner may read either way.
+    const double blur_s = noise_um > 0.0 ? 0.1 : 0.01;
+    for (std::size_t k = 1; k < t.size(); ++k) {
+      if (std::abs(t[k] - 1.0) <= blur_s) continue;
+      wrong += phase[k] != (t[k] < 1.0 ? "loading" : "hold") ? 1 : 0;
+    }
+    EXPECT_EQ(wrong, 0);
+  }
 }
 
 TEST(Compare, ConstantOffsetGivesExactErrorAndScore) {
