@@ -361,26 +361,34 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
       last_row[key] = k;
     }
   }
-  // Compression is the plate's travel into the sample, positive. A trial that travels the
-  // other way, rising above its first value by less than a tenth of its fall (noise on a
-  // still plate), was most likely recorded with compression negative; run as it stands, the
-  // twin's plate would lift off and answer zero force at every row.
+  // Compression is the plate's travel into the sample, positive. A trial whose force peaks
+  // (|force - first force| largest) below its first displacement by more than an encoder's
+  // jitter (10 um), while the displacement never rises above the start by a tenth of that,
+  // was most likely recorded with compression negative: run as it stands, the twin's plate
+  // would lift off and answer 0 N at every row. Judged at the force's peak, a return past the
+  // start after unloading or a back-off before a pre-loaded test is not mistaken for it.
   const Channel* displacement = table.find("displacement");
+  const Channel* force = table.find("force");
   if (schema != nullptr && schema->type == ExperimentType::kCompress && displacement != nullptr &&
-      table.rows() > 0) {
+      force != nullptr && table.rows() > 0) {
+    constexpr double kEncoderJitterM = 10e-6;
     const std::vector<double>& d = displacement->values_si;
-    const auto [lowest, highest] = std::minmax_element(d.begin(), d.end());
-    const double rise = *highest - d.front();
-    const double fall = d.front() - *lowest;
-    if (fall > 0.0 && rise < 0.1 * fall) {
-      const auto lowest_row = static_cast<std::size_t>(lowest - d.begin());
-      problems.add(table.lines[lowest_row], 0,
-                   "displacement falls from its first value (" +
-                       in_unit(d.front(), displacement->unit) + ") to " +
-                       in_unit(*lowest, displacement->unit) + " and rises at most " +
+    const std::vector<double>& f = force->values_si;
+    std::size_t peak = 0;
+    for (std::size_t k = 1; k < f.size(); ++k) {
+      if (std::abs(f[k] - f.front()) > std::abs(f[peak] - f.front())) peak = k;
+    }
+    const double rise = *std::max_element(d.begin(), d.end()) - d.front();
+    const double fall_at_peak = d.front() - d[peak];
+    if (fall_at_peak > kEncoderJitterM && rise < 0.1 * fall_at_peak) {
+      problems.add(table.lines[peak], 0,
+                   "the force peaks where the displacement is " +
+                       in_unit(d[peak], displacement->unit) + ", below its first value (" +
+                       in_unit(d.front(), displacement->unit) + "), and it never rises more than " +
                        in_unit(rise, displacement->unit) +
-                       " above it: compression is positive in this format; if the machine "
-                       "records it negative, write the column with its sign changed");
+                       " above that: compression is positive in this format; if the machine "
+                       "records it negative, write the column with its sign changed (or the "
+                       "first row is not where the test starts)");
     }
   }
   if (problems.count() > 0) return std::nullopt;

@@ -220,21 +220,25 @@ TEST(Dataset, CellProblemsNameLineAndColumn) {
 TEST(Dataset, CompressionWrittenNegativeIsRefusedNotRunAsALiftOff) {
   const DatasetFolder folder;
   folder.write("manifest.yaml", manifest("compress", kRate, kOneTrial));
-  // A machine that records compression negative: the plate only ever moves "up". Run as it
+  const std::string header = "time [s],displacement [mm],force [N]\n";
+  // A machine that records compression negative: the force peaks 1.5 mm "up". Run as it
   // stands the twin's plate would leave the sample and answer 0 N at every row.
-  folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,0,0\n1,-0.5,2\n2,-1.5,6\n");
+  folder.write("a.csv", header + "0,0,0\n1,-0.5,2\n2,-1.5,6\n");
   EXPECT_TRUE(has_problem(problems_of(folder.path()), "a.csv", 4,
-                          "to -1.5 mm and rises at most 0 mm above it: compression is positive"));
-  // The same with 1 um of noise lifting one row above the start: 1 um against a 1.5 mm fall.
-  folder.write("a.csv",
-               "time [s],displacement [mm],force [N]\n0,0,0\n1,0.001,0\n2,-0.5,2\n3,-1.5,6\n");
+                          "below its first value (0 mm), and it never rises more than 0 mm"));
+  // The same with 1 um of noise lifting one row above the start: 1 um against 1.5 mm.
+  folder.write("a.csv", header + "0,0,0\n1,0.001,0\n2,-0.5,2\n3,-1.5,6\n");
   EXPECT_TRUE(has_problem(problems_of(folder.path()), "a.csv", 5, "compression is positive"));
-  // An absolute crosshead position that rises from 12.5 mm is compression: loaded.
-  folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,12.5,0\n1,13,2\n2,14,6\n");
-  EXPECT_NO_THROW((void)load_dataset(folder.path()));
-  // A load and unload that dips 1 um below the start on the way back (noise) is loaded too.
-  folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,0,0\n1,1,4\n2,-0.001,0\n");
-  EXPECT_NO_THROW((void)load_dataset(folder.path()));
+  // Loaded, each way the review of the first rule found refused:
+  const auto loads = [&](const std::string& rows) {
+    folder.write("a.csv", header + rows);
+    EXPECT_NO_THROW((void)load_dataset(folder.path())) << rows;
+  };
+  loads("0,12.5,0\n1,13,2\n2,14,6\n");               // an absolute crosshead position
+  loads("0,0,0\n1,1,4\n2,-0.001,0\n");               // unloaded 1 um past the start (noise)
+  loads("0,0,0\n1,1,4\n2,0,0\n3,-11,0\n");           // unloaded, then back home 11 mm up
+  loads("0,0,0.5\n1,-2,0\n2,0,0.5\n3,0.15,2\n");     // a pre-load, a 2 mm back-off, 0.15 mm in
+  loads("0,0,1\n1,0,1.02\n2,-0.001,0.98\n3,0,1\n");  // a still plate, 1 um of jitter
 }
 
 TEST(Dataset, FileProblems) {
