@@ -185,28 +185,39 @@ std::size_t held_out_trial(const Dataset& dataset, const std::vector<double>& ba
   return worst;
 }
 
+namespace {
+// The held-out trial's error fall of a fitted candidate (0 without a held-out error).
+double held_out_gain(const Diagnosis& diagnosis, const CandidateResult& result) {
+  return diagnosis.base_held_out_rmse > 0.0
+             ? 1.0 - result.held_out_rmse / diagnosis.base_held_out_rmse
+             : 0.0;
+}
+}  // namespace
+
 void rank_candidates(Diagnosis& diagnosis, std::vector<CandidateResult> results,
                      const DiagnoseOptions& options) {
   for (CandidateResult& result : results) {
     result.delta_bic = result.bic - diagnosis.base_bic;
     const double rmse = std::sqrt(result.rss / static_cast<double>(diagnosis.samples));
     result.improvement = diagnosis.base_rmse > 0.0 ? 1.0 - rmse / diagnosis.base_rmse : 0.0;
-    const double held_out_gain = diagnosis.base_held_out_rmse > 0.0
-                                     ? 1.0 - result.held_out_rmse / diagnosis.base_held_out_rmse
-                                     : 0.0;
-    result.proposed =
-        result.delta_bic < -options.min_bic_drop && held_out_gain > options.min_held_out_gain;
+    result.proposed = result.delta_bic < -options.min_bic_drop &&
+                      held_out_gain(diagnosis, result) > options.min_held_out_gain;
   }
   std::sort(results.begin(), results.end(),
             [](const CandidateResult& a, const CandidateResult& b) { return a.bic < b.bic; });
-  // Only the best may be proposed: the effects compete to explain the same residual. A
-  // runner-up that would pass on its own and comes within min_bic_drop of the best is named:
-  // the data then cannot tell the two apart (on slide onset angles a resting friction and a
-  // rolling resistance both raise the angle), and the proposal says so.
-  if (results.size() > 1 && results[0].proposed && results[1].proposed &&
-      results[1].bic - results[0].bic < options.min_bic_drop) {
-    diagnosis.indistinct_from = results[1].law;
-    diagnosis.indistinct_bic_gap = results[1].bic - results[0].bic;
+  // Only the best may be proposed: the effects compete to explain the same residual. Another
+  // that predicts the held-out trial as well and comes within min_bic_drop of the best is
+  // named: the data then cannot tell the two apart (on slide onset angles a resting friction
+  // and a rolling resistance both raise the angle), and the proposal says so.
+  if (!results.empty() && results[0].proposed) {
+    for (std::size_t k = 1; k < results.size(); ++k) {
+      if (results[k].bic - results[0].bic >= options.min_bic_drop) break;
+      if (held_out_gain(diagnosis, results[k]) > options.min_held_out_gain) {
+        diagnosis.indistinct_from = results[k].law;
+        diagnosis.indistinct_bic_gap = results[k].bic - results[0].bic;
+        break;
+      }
+    }
   }
   for (std::size_t k = 1; k < results.size(); ++k) results[k].proposed = false;
   diagnosis.ranked = std::move(results);
@@ -225,6 +236,12 @@ std::string diagnosis_verdict(const Diagnosis& diagnosis, const DiagnoseOptions&
       verdict << "; the fitted ensemble's own spread is " << best.model_spread
               << " (RMS), which adds to the noise";
     }
+    const double fitted_rmse = std::sqrt(best.rss / static_cast<double>(diagnosis.samples));
+    const double floor_si = std::hypot(diagnosis.noise_si, best.model_spread);
+    if (floor_si > 0.0 && fitted_rmse > 2.0 * floor_si) {
+      verdict << "; with it the model is still " << fitted_rmse / floor_si
+              << " noise sigmas off, so part of the failure is left unexplained";
+    }
     if (!diagnosis.indistinct_from.empty()) {
       verdict << ". But " << diagnosis.indistinct_from << " explains it nearly as well (BIC only "
               << diagnosis.indistinct_bic_gap << " higher, under " << options.min_bic_drop
@@ -235,12 +252,17 @@ std::string diagnosis_verdict(const Diagnosis& diagnosis, const DiagnoseOptions&
     // The base model's own misfit in noise sigmas (an ensemble's spread counts as noise).
     const double floor_si = std::hypot(diagnosis.noise_si, diagnosis.base_model_spread);
     const bool base_fails = floor_si > 0.0 && diagnosis.base_rmse > 2.0 * floor_si;
-    verdict << (base_fails ? "no candidate explains the failure: base RMS "
-                           : "nothing missing among the candidates: base RMS ")
+    verdict << (base_fails        ? "no candidate explains the failure: base RMS "
+                : floor_si == 0.0 ? "no candidate is proposed: base RMS "
+                                  : "nothing missing among the candidates: base RMS ")
             << diagnosis.base_rmse;
     if (diagnosis.noise_si > 0.0) verdict << " against noise " << diagnosis.noise_si;
-    verdict << "; no effect lowers the BIC by " << options.min_bic_drop
+    verdict << "; the best-ranked effect does not lower the BIC by " << options.min_bic_drop
             << " and the held-out error by " << 100.0 * options.min_held_out_gain << " %";
+    if (floor_si == 0.0) {
+      verdict << ". The dataset gives no noise for " << diagnosis.channel
+              << ", so whether the base model fits cannot be judged: give it in the manifest";
+    }
     if (base_fails) {
       verdict << ". The base model is " << diagnosis.base_rmse / floor_si
               << " noise sigmas off: calibrate its base parameters (linectl calibrate), or check "
