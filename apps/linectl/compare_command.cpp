@@ -201,22 +201,34 @@ int diagnose_command(const CompareArgs& args) {
   }
   spdlog::info("{}", diagnosis.verdict);
   const HiddenEffect effect = proposed_effect(diagnosis);
+  fs::remove(out / "effect.yaml");  // a rerun that proposes nothing leaves none behind
   if (!effect.law.empty()) {
     // The whole law list or block as the fitted model has it, so it loads as pasted (a
     // static_kinetic_friction needs the kinetic coefficient it inherits from the coulomb).
     const bool contact_effect = inputs->dataset.experiment == ExperimentType::kSlide ||
                                 inputs->dataset.experiment == ExperimentType::kLineTracks;
-    const std::string snippet =
-        effect_config_snippet(inputs->common.base_spec, inputs->dataset.experiment, effect);
+    std::string snippet;
+    try {
+      snippet = effect_config_snippet(inputs->common.base_spec, inputs->dataset.experiment, effect);
+    } catch (const std::invalid_argument& error) {
+      spdlog::error("{}: {}", args.dataset, error.what());
+      return 2;
+    }
     if (contact_effect) {
       spdlog::info(
-          "to add it, make this the contact_laws of every fillet-equipment interaction of the "
-          "DEM config (in config/dem.yaml the list anchored &fillet_equipment):\n{}",
+          "to add it, make these the items of the contact_laws list of every fillet-equipment "
+          "interaction of the DEM config (in config/dem.yaml the list anchored "
+          "&fillet_equipment):\n{}",
           snippet);
     } else {
       spdlog::info("to add it, make this the bond_law of the DEM config:\n{}", snippet);
     }
-    std::ofstream(out / "effect.yaml") << snippet;
+    std::ofstream file(out / "effect.yaml");
+    file << snippet;
+    if (!file) {
+      spdlog::error("{}: cannot write", (out / "effect.yaml").string());
+      return 2;
+    }
   }
   spdlog::info("diagnosis: {}", (out / "diagnosis.json").string());
   return 0;

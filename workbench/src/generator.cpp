@@ -8,6 +8,7 @@
 #include <random>
 #include <stdexcept>
 #include <string_view>
+#include <utility>
 
 #include "fl/report/csv.hpp"
 #include "fl/twin/dem/config.hpp"
@@ -334,17 +335,33 @@ std::string effect_config_snippet(const dem::ModelSpec& base, ExperimentType exp
     return text;
   };
   if (experiment == ExperimentType::kSlide || experiment == ExperimentType::kLineTracks) {
+    // The list's items, to go under the config's own key (config/dem.yaml anchors it): one
+    // list when every fillet-equipment chain is the same, else one per pair, named.
     const std::uint32_t equipment = model_tests::equipment_type(spec);
+    const auto type_name = [&spec](std::uint32_t type) {
+      return type < spec.types.size() ? spec.types[type].name : std::to_string(type);
+    };
+    std::vector<std::pair<std::string, std::string>> chains;  // pair, items
     for (const dem::InteractionSpec& interaction : spec.interactions) {
       if (!model_tests::is_fillet_with(interaction, equipment)) continue;
-      std::string snippet = "    contact_laws:\n";
+      std::string items;
       for (const dem::LawSpec& law : interaction.contact_laws) {
-        snippet += "      - {law: " + law.name + values(law.parameters, ", ") + "}\n";
+        items += "      - {law: " + law.name + values(law.parameters, ", ") + "}\n";
       }
-      return snippet;
+      chains.emplace_back(type_name(interaction.type_a) + " - " + type_name(interaction.type_b),
+                          items);
     }
-    throw std::invalid_argument("the model has no fillet-equipment interaction to add " +
-                                effect.law + " to");
+    if (chains.empty()) {
+      throw std::invalid_argument("the model has no fillet-equipment interaction to add " +
+                                  effect.law + " to");
+    }
+    const bool all_same = std::all_of(chains.begin(), chains.end(), [&chains](const auto& c) {
+      return c.second == chains.front().second;
+    });
+    if (all_same) return chains.front().second;
+    std::string snippet;
+    for (const auto& [pair, items] : chains) snippet += "    # " + pair + "\n" + items;
+    return snippet;
   }
   for (const dem::InteractionSpec& interaction : spec.interactions) {
     if (!interaction.bond_law) continue;

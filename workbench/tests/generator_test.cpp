@@ -129,12 +129,15 @@ dem::ModelSpec edited_config(const std::string& anchor_line, const std::string& 
     out << line << "\n";
   }
   EXPECT_TRUE(anchored) << anchor_line << " not in " << config;
-  const auto edited = std::filesystem::temp_directory_path() / "fl_effect_snippet_dem.yaml";
+  const auto edited =
+      std::filesystem::temp_directory_path() /
+      ("fl_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
+       "_dem.yaml");
   std::ofstream(edited) << out.str();
   return dem::load_model_spec(edited);
 }
 
-// The snippet without its first line (the key it sits under, kept with its anchor).
+// The bond snippet without its first line (the key, as the config has it).
 std::string body(const std::string& snippet) { return snippet.substr(snippet.find('\n') + 1); }
 
 void expect_same_laws(const dem::LawSpec& loaded, const dem::LawSpec& fitted) {
@@ -157,7 +160,7 @@ TEST(EffectConfigSnippet, PastedAsPrintedItLoadsAsTheFittedModel) {
   EXPECT_NE(contact.find("kinetic_friction_coefficient: 0.5"), std::string::npos) << contact;
   const dem::ModelSpec fitted = with_contact_effect(base, friction);
   const dem::ModelSpec pasted =
-      edited_config("    contact_laws: &fillet_equipment", "      - ", body(contact));
+      edited_config("    contact_laws: &fillet_equipment", "      - ", contact);
   ASSERT_EQ(pasted.interactions.size(), fitted.interactions.size());
   for (std::size_t k = 0; k < fitted.interactions.size(); ++k) {
     const auto& a = pasted.interactions[k].contact_laws;
@@ -179,6 +182,24 @@ TEST(EffectConfigSnippet, PastedAsPrintedItLoadsAsTheFittedModel) {
     }
   }
   EXPECT_TRUE(effect_config_snippet(base, ExperimentType::kSlide, {}).empty());
+  // Chains that differ by pair (a user's fillet_b on a rougher plate) are written one per pair,
+  // named, rather than one list for every pair.
+  dem::ModelSpec rougher = base;
+  const std::uint32_t equipment = model_tests::equipment_type(rougher);
+  for (dem::InteractionSpec& interaction : rougher.interactions) {
+    if (!model_tests::is_fillet_with(interaction, equipment) ||
+        rougher.types[interaction.type_a].name != "fillet_b") {
+      continue;
+    }
+    for (dem::LawSpec& law : interaction.contact_laws) {
+      if (law.name == "coulomb") law.parameters["friction_coefficient"] = 0.6;
+    }
+  }
+  const HiddenEffect wet{"wet_film", {{"lubrication", 0.3}}};
+  const std::string per_pair = effect_config_snippet(rougher, ExperimentType::kSlide, wet);
+  EXPECT_NE(per_pair.find("    # fillet_a - equipment\n"), std::string::npos) << per_pair;
+  EXPECT_NE(per_pair.find("    # fillet_b - equipment\n"), std::string::npos) << per_pair;
+  EXPECT_NE(per_pair.find("friction_coefficient: 0.6}"), std::string::npos) << per_pair;
 }
 
 }  // namespace

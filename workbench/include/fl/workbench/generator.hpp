@@ -90,10 +90,12 @@ dem::ModelSpec with_experiment_effect(const dem::ModelSpec& base, ExperimentType
                                       const HiddenEffect& effect);
 
 // What to paste into the DEM config (config/dem.yaml's layout) to add an effect as
-// with_experiment_effect does: for a contact effect the whole resulting `contact_laws:` list of
-// a fillet-equipment interaction (the replaced or inherited parameters written out, so the
-// text loads as it is); for a bond effect the whole `bond_law:` block. Empty for no effect;
-// throws std::invalid_argument when the model has no such interaction.
+// with_experiment_effect does: for a contact effect the items of the resulting fillet-equipment
+// `contact_laws:` list, to replace the items under the config's own key (the replaced or
+// inherited parameters written out, so the text loads as it is; one list per pair, each after
+// a `# type_a - type_b` line, when the pairs' chains differ); for a bond effect the whole
+// `bond_law:` block. Empty for no effect; throws std::invalid_argument when the model has no
+// such interaction.
 [[nodiscard]] std::string effect_config_snippet(const dem::ModelSpec& base,
                                                 ExperimentType experiment,
                                                 const HiddenEffect& effect);
