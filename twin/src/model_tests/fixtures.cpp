@@ -158,6 +158,17 @@ void set_contact_parameter(dem::ModelSpec& spec, const std::string& law, const s
   }
 }
 
+bool has_fillet_contact_law(const dem::ModelSpec& spec, std::string_view law,
+                            std::uint32_t other_type) {
+  return std::any_of(
+      spec.interactions.begin(), spec.interactions.end(), [&](const dem::InteractionSpec& i) {
+        return is_fillet_with(i, other_type) &&
+               std::any_of(
+                   i.contact_laws.begin(), i.contact_laws.end(),
+                   [&](const dem::LawSpec& spec_of_law) { return spec_of_law.name == law; });
+      });
+}
+
 void set_friction_coefficient(dem::ModelSpec& spec, double mu,
                               std::optional<std::uint32_t> other_type) {
   bool found = false;

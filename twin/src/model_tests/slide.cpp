@@ -18,12 +18,7 @@ SlideResult run_slide(const SlideParams& params) {
   set_friction_coefficient(spec, params.friction_coefficient, equipment);
   // A model without adhesion has no jkr in the chain: it slides at zero surface energy, and
   // only a sweep that asks for adhesion needs one.
-  const bool has_jkr = std::any_of(
-      spec.interactions.begin(), spec.interactions.end(), [&](const dem::InteractionSpec& i) {
-        return is_fillet_with(i, equipment) &&
-               std::any_of(i.contact_laws.begin(), i.contact_laws.end(),
-                           [](const dem::LawSpec& law) { return law.name == "jkr"; });
-      });
+  const bool has_jkr = has_fillet_contact_law(spec, "jkr", equipment);
   if (has_jkr) {
     set_contact_parameter(spec, "jkr", "surface_energy_j_per_m2", params.surface_energy_j_per_m2,
                           equipment);

@@ -11,6 +11,7 @@
 #include <optional>
 #include <random>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "fl/twin/dem/fillet_template.hpp"
@@ -62,6 +63,10 @@ void set_bond_stiffness(dem::ModelSpec& spec, const Stiffness& stiffness,
 // fillet type with `other_type` (std::nullopt: with every type).
 void set_contact_parameter(dem::ModelSpec& spec, const std::string& law, const std::string& key,
                            double value, std::optional<std::uint32_t> other_type);
+// Whether some interaction of a fillet type with `other_type` has the contact law `law` in its
+// chain (a model without adhesion has no jkr).
+bool has_fillet_contact_law(const dem::ModelSpec& spec, std::string_view law,
+                            std::uint32_t other_type);
 // Sets the friction coefficient of the friction laws in the contact laws of every interaction
 // of a fillet type with `other_type` (std::nullopt: with every type): coulomb's
 // friction_coefficient, and static_kinetic_friction's static coefficient with the kinetic one
