@@ -25,8 +25,9 @@ constexpr double kPhaseRateNoiseShare = 0.01;
 double displacement_noise_m(const std::vector<double>& d) {
   if (d.size() < 3) return 0.0;
   std::vector<double> second(d.size() - 2);
-  for (std::size_t k = 0; k + 2 < d.size(); ++k)
+  for (std::size_t k = 0; k + 2 < d.size(); ++k) {
     second[k] = std::abs(d[k + 2] - 2.0 * d[k + 1] + d[k]);
+  }
   const auto middle = second.begin() + static_cast<std::ptrdiff_t>(second.size() / 2);
   std::nth_element(second.begin(), middle, second.end());
   return *middle / (0.6745 * std::sqrt(6.0));
