@@ -291,8 +291,8 @@ Summary run_slide(const Context& context) {
   // A model without adhesion (no jkr between fillet and plate) slides at zero surface energy,
   // and has no surface energy to sweep.
   const dem::ModelSpec& base = c.slide.common.base_spec;
-  const bool has_adhesion =
-      model_tests::has_fillet_contact_law(base, "jkr", model_tests::equipment_type(base));
+  const std::uint32_t equipment = model_tests::equipment_type(base);
+  const bool has_adhesion = model_tests::has_fillet_contact_law(base, "jkr", equipment);
   if (!has_adhesion) {
     spdlog::warn(
         "slide: the DEM config's fillet-equipment contact laws have no jkr: every case "
@@ -360,14 +360,8 @@ Summary run_slide(const Context& context) {
   plot.title = "Slide test: slide angle against friction coefficient";
   // With static_kinetic_friction in the fillet-steel chain the swept mu is the static one
   // (the onset, so atan(mu) stays the reference), mu_k following at its configured ratio.
-  const dem::ModelSpec spec = model_tests::make_spec(c.slide.common);
-  const std::uint32_t equipment = model_tests::equipment_type(spec);
-  const bool static_kinetic = std::ranges::any_of(spec.interactions, [&](const auto& i) {
-    return model_tests::is_fillet_with(i, equipment) &&
-           std::ranges::any_of(i.contact_laws, [](const auto& law) {
-             return law.name == "static_kinetic_friction";
-           });
-  });
+  const bool static_kinetic =
+      model_tests::has_fillet_contact_law(base, "static_kinetic_friction", equipment);
   plot.x.label = static_kinetic
                      ? "static friction coefficient mu_s fillet-steel (mu_k at the configured "
                        "mu_k / mu_s) (-)"
