@@ -8,6 +8,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "displacement_path.hpp"
+
 namespace fl::workbench {
 namespace {
 
@@ -18,20 +20,6 @@ constexpr double kHoldRateShare = 0.05;
 // with the hold threshold at 5 % of the fastest rate, 1 % of the mean rate (never above the
 // fastest) keeps noise five sigmas from flipping a label.
 constexpr double kPhaseRateNoiseShare = 0.01;
-
-// The displacement noise of a trial, 1 sigma, from its own rows: the median absolute second
-// difference (a ramp's is zero, a corner's one row of many) is 0.6745 sqrt(6) sigma for white
-// noise.
-double displacement_noise_m(const std::vector<double>& d) {
-  if (d.size() < 3) return 0.0;
-  std::vector<double> second(d.size() - 2);
-  for (std::size_t k = 0; k + 2 < d.size(); ++k) {
-    second[k] = std::abs(d[k + 2] - 2.0 * d[k + 1] + d[k]);
-  }
-  const auto middle = second.begin() + static_cast<std::ptrdiff_t>(second.size() / 2);
-  std::nth_element(second.begin(), middle, second.end());
-  return *middle / (0.6745 * std::sqrt(6.0));
-}
 
 // A drop's phases from its condition, not from the noisy track: released at rest, the fillet's
 // lowest point meets the plate after sqrt(2 h / g); the landing (impact, rebound, the flapping
@@ -146,16 +134,8 @@ std::vector<std::string> phases_of(ExperimentType type, const Trial& trial) {
   // displacement noise under kPhaseRateNoiseShare of its loading rate: from neighbouring rows, a
   // fast logger's noise made loading rows flicker between loading, unloading and hold, while a
   // window of fixed length blurred a short ramp before a long hold. The rate noise of a window
-  // of +-h is sqrt(2) sigma / (2 h). The loading rate: the fastest over spans of 1 % of the
-  // rows, which averages the noise out and still fits inside any ramp a label is wanted for.
-  const std::size_t span = std::max<std::size_t>(1, rows / 100);
-  double loading_rate = 0.0;
-  for (std::size_t k = 0; k + span < rows; ++k) {
-    loading_rate = std::max(loading_rate, std::abs(d[k + span] - d[k]) / (t[k + span] - t[k]));
-  }
-  const double half_window_s = loading_rate > 0.0 ? std::sqrt(2.0) * displacement_noise_m(d) /
-                                                        (2.0 * kPhaseRateNoiseShare * loading_rate)
-                                                  : 0.0;
+  // of +-h is sqrt(2) sigma / (2 h).
+  const double half_window_s = detail::rate_window_half_s(t, d, kPhaseRateNoiseShare);
   std::vector<double> rate(rows, 0.0);
   double fastest = 0.0;
   std::size_t first = 0;  // the first row in the window, then the last (times increase)
