@@ -127,6 +127,12 @@ CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args) {
   generate->add_option("--seed", args.seed, "random seed (effect, parameters, noise)");
   generate->add_option("--force-noise-n", args.force_noise_n, "1-sigma force noise in N")
       ->check(CLI::Range(0.0, 10.0));
+  generate
+      ->add_option("--displacement-noise-um", args.displacement_noise_um,
+                   "compress: 1-sigma noise on the logged displacement")
+      ->check(CLI::Range(0.0, 100.0));
+  generate->add_option("--row-ms", args.compress_row_ms, "compress: the logger's row interval")
+      ->check(CLI::Range(0.01, 5.0));
   generate->add_option("--angle-noise-deg", args.angle_noise_deg, "slide: 1-sigma angle noise")
       ->check(CLI::Range(0.0, 10.0));
   generate->add_option("--height-noise-mm", args.height_noise_mm, "drop: 1-sigma height noise")
@@ -156,6 +162,8 @@ int generate_command(const GenerateArgs& args) {
   options.effect = args.effect;
   options.experiment = *experiment_from_string(args.experiment);  // checked by the option
   options.force_noise_n = args.force_noise_n;
+  options.displacement_noise_um = args.displacement_noise_um;
+  options.compress_row_s = args.compress_row_ms * 1e-3;
   options.angle_noise_deg = args.angle_noise_deg;
   options.height_noise_mm = args.height_noise_mm;
   options.bend_angle_noise_deg = args.bend_angle_noise_deg;

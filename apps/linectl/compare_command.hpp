@@ -39,6 +39,8 @@ struct GenerateArgs {
   std::string experiment = "compress";
   std::uint64_t seed = 1;
   double force_noise_n = 0.01;
+  double displacement_noise_um = 0.0;
+  double compress_row_ms = 5.0;
   double angle_noise_deg = 0.3;
   double height_noise_mm = 0.5;
   double bend_angle_noise_deg = 1.0;

@@ -216,18 +216,17 @@ Trial line_tracks_trial(int k, int fillets, std::mt19937_64& random) {
   return trial;
 }
 
-// Load to the peak travel over `ramp_s`, hold, unload over `ramp_s`; rows every 5 ms.
-Trial compress_trial(const std::string& id, double ramp_s) {
+// Load to the peak travel over `ramp_s`, hold, unload over `ramp_s`; a row every `row_s`.
+Trial compress_trial(const std::string& id, double ramp_s, double row_s) {
   constexpr double kPeakTravelM = 0.5e-3;  // 1.8 % of the 28 mm block: linear bonds
   constexpr double kHoldS = 0.1;
-  constexpr double kRowS = 0.005;
   Trial trial;
   trial.id = id;
   std::vector<double> t, d;
   const double end_s = 2.0 * ramp_s + kHoldS;
-  const auto rows = static_cast<int>(std::lround(end_s / kRowS));
+  const auto rows = static_cast<int>(std::lround(end_s / row_s));
   for (int k = 0; k <= rows; ++k) {
-    const double time = kRowS * k;
+    const double time = row_s * k;
     double travel = kPeakTravelM;
     if (time < ramp_s) travel = kPeakTravelM * time / ramp_s;
     if (time > ramp_s + kHoldS) travel = kPeakTravelM * std::max(0.0, end_s - time) / ramp_s;
@@ -395,10 +394,16 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
   if (bend) noise_si = options.bend_angle_noise_deg * std::numbers::pi / 180.0;
   if (drop) noise_si = options.height_noise_mm * 1e-3;
   const double track_angle_noise_si = options.track_angle_noise_deg * std::numbers::pi / 180.0;
+  const double displacement_noise_si = options.displacement_noise_um * 1e-6;
   if (options.trials < 0 || options.repetitions < 1 || options.fillets_per_trial < 1 ||
-      !(noise_si >= 0.0) || !(track_angle_noise_si >= 0.0)) {
+      !(noise_si >= 0.0) || !(track_angle_noise_si >= 0.0) || !(displacement_noise_si >= 0.0)) {
     throw std::invalid_argument(
         "generator: trials must be >= 0, repetitions and fillets >= 1 and the noise >= 0");
+  }
+  if (!(options.compress_row_s > 0.0 && options.compress_row_s <= 0.005)) {
+    throw std::invalid_argument(
+        "generator: the compress row interval must be above 0 and at most 5 ms, a tenth of the "
+        "third trial's 50 ms ramp");
   }
   const int trials = options.trials > 0 ? options.trials : (slide || tracks ? 4 : 3);
   std::mt19937_64 random(options.seed);
@@ -448,6 +453,8 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
     data.noise_si["y"] = noise_si;
     data.noise_si["angle"] = track_angle_noise_si;
   }
+  const bool noisy_displacement = !slide && !drop && !bend && !tracks && displacement_noise_si > 0;
+  if (noisy_displacement) data.noise_si["displacement"] = displacement_noise_si;
   std::normal_distribution<double> noise(0.0, noise_si);
   for (int k = 0; k < trials; ++k) {
     // Compress: ramps of 0.2, 0.1, 0.05 s, ...: the rate dependence shows.
@@ -461,7 +468,8 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
     } else if (tracks) {
       trial = line_tracks_trial(k, options.fillets_per_trial, random);
     } else {
-      trial = compress_trial("rate" + std::to_string(k + 1), 0.2 / std::pow(2.0, k));
+      trial = compress_trial("rate" + std::to_string(k + 1), 0.2 / std::pow(2.0, k),
+                             options.compress_row_s);
     }
     if (tracks) {
       // A fillet's first row is where the camera first saw it, noise and all: the truth starts
@@ -502,6 +510,13 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
     measured = response.at(channel).values_si;
     if (noise_si > 0.0) {
       for (double& value : measured) value += noise(random);
+    }
+    if (noisy_displacement) {
+      // The truth ran on the true path; the log shows the encoder's reading of it.
+      std::normal_distribution<double> displacement_noise(0.0, displacement_noise_si);
+      for (double& value : trial.data.channels[1].values_si) {  // time, displacement, force
+        value += displacement_noise(random);
+      }
     }
     data.trials.push_back(std::move(trial));
   }

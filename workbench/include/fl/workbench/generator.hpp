@@ -41,7 +41,11 @@ struct GeneratorOptions {
   std::uint64_t seed = 1;
   // "random": one of the experiment's candidates; "none"; or a law name from the candidates.
   std::string effect = "random";
-  double force_noise_n = 0.01;        // compress: 1 sigma, Gaussian; written into the manifest
+  double force_noise_n = 0.01;  // compress: 1 sigma, Gaussian; written into the manifest
+  // Compress: 1 sigma on the logged displacement (the crosshead's encoder; the truth's plate
+  // follows the true path) and the logger's row interval.
+  double displacement_noise_um = 0.0;
+  double compress_row_s = 0.005;
   double angle_noise_deg = 0.3;       // slide: 1 sigma on each onset angle (an inclinometer's)
   double height_noise_mm = 0.5;       // drop: 1 sigma on each tracked height (a 200 fps camera's)
   double bend_angle_noise_deg = 1.0;  // bend: 1 sigma on each angle (read off a side photo)
