@@ -463,6 +463,15 @@ class BondedParticleModel final : public BondLaw {
   }
 
   [[nodiscard]] double normal_stiffness_n_per_m(const Bond& bond) const override {
+    double stiffness_n_per_m3 = normal_stiffness_;
+    // A Maxwell arm is a spring too until its dashpot gives: a stretch within one step meets
+    // k + k_m, which is what an explicit step has to resolve.
+    if constexpr (requires { normal_.arm_stiffness_n_per_m3; }) {
+      stiffness_n_per_m3 += normal_.arm_stiffness_n_per_m3;
+    }
+    return stiffness_n_per_m3 * grading_.scale(bond.thickness_m) * area_m2(bond.bond_radius_m);
+  }
+  [[nodiscard]] double relaxed_normal_stiffness_n_per_m(const Bond& bond) const override {
     return normal_stiffness_ * grading_.scale(bond.thickness_m) * area_m2(bond.bond_radius_m);
   }
   [[nodiscard]] double shear_stiffness_n_per_m(const Bond& bond) const override {

@@ -275,7 +275,8 @@ dem::FilletTemplate make_block(double radius_m, int nx, int ny, int nz) {
   return block;
 }
 
-double bond_critical_step_s(const dem::ModelSpec& spec, const dem::FilletTemplate& fillet) {
+double bond_critical_step_s(const dem::ModelSpec& spec, const dem::FilletTemplate& fillet,
+                            bool relaxed) {
   // The bond law of the fillet types as the engine builds it, asked for each bond's spring
   // constants: a graded law's differ from bond to bond, and every bpm variant counts.
   const dem::InteractionSpec* bonded = nullptr;
@@ -297,8 +298,9 @@ double bond_critical_step_s(const dem::ModelSpec& spec, const dem::FilletTemplat
     dem::Bond bond;
     bond.bond_radius_m = std::min(fillet.radii_m[b.i], fillet.radii_m[b.j]);
     bond.thickness_m = b.thickness_m;
-    const double k =
-        std::max(law->normal_stiffness_n_per_m(bond), law->shear_stiffness_n_per_m(bond));
+    const double normal =
+        relaxed ? law->relaxed_normal_stiffness_n_per_m(bond) : law->normal_stiffness_n_per_m(bond);
+    const double k = std::max(normal, law->shear_stiffness_n_per_m(bond));
     stiffness_n_per_m[b.i] += k;
     stiffness_n_per_m[b.j] += k;
   }
@@ -318,7 +320,9 @@ double choose_timestep_s(const CommonParams& common, const dem::ModelSpec& spec,
   double dt = common.rayleigh_fraction * dem::rayleigh_time_s(radius, m.density_kg_per_m3,
                                                               m.youngs_modulus_pa, m.poisson_ratio);
   if (common.bond_step_fraction > 0.0) {
-    dt = std::min(dt, common.bond_step_fraction * bond_critical_step_s(spec, fillet));
+    dt = std::min(dt, common.bond_step_fraction * bond_critical_step_s(spec, fillet, true));
+    const double limit_s = common.bond_step_fraction * bond_critical_step_s(spec, fillet);
+    while (dt > limit_s) dt *= 0.5;
   }
   return dt;
 }

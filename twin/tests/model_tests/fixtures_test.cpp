@@ -57,6 +57,53 @@ TEST(ModelTestsFixtures, BondCriticalStepMatchesEngine) {
   EXPECT_NEAR(bond_critical_step_s(spec, block), sim.check_timestep().bond_critical_step_s, 1e-12);
 }
 
+// The spec's bond laws as bpm_viscoelastic with an arm of `arm_share` times the normal
+// stiffness and a relaxation time far longer than a step (the arm a spring within it).
+dem::ModelSpec with_maxwell_arm(dem::ModelSpec spec, double arm_share) {
+  for (dem::InteractionSpec& interaction : spec.interactions) {
+    if (!interaction.bond_law) continue;
+    dem::LawSpec& law = *interaction.bond_law;
+    law.name = "bpm_viscoelastic";
+    law.parameters["relaxation_stiffness_n_per_m3"] =
+        arm_share * law.parameters.at("normal_stiffness_n_per_m3");
+    law.parameters["relaxation_time_s"] = 0.05;
+  }
+  return spec;
+}
+
+// A visco-elastic bond's arm is a spring within a step: the critical step is the one of
+// k_n + k_m, in the engine's check as in the model tests' step chooser, and the step chosen is
+// the elastic one halved until it resolves that (so it is the same over a range of arms).
+TEST(ModelTestsFixtures, AViscoelasticArmShortensTheStepInHalvings) {
+  CommonParams common;
+  const dem::ModelSpec elastic = make_spec(common);
+  const auto block = make_block(0.007, 3, 3, 3);
+  const double elastic_critical_s = bond_critical_step_s(elastic, block);
+  const double elastic_step_s = choose_timestep_s(common, elastic, block);
+  // The appendix B block's step is the Rayleigh time's (15 %), 0.61 of the bonds' limit (0.2 of
+  // their critical step). The limit with an arm is 1/sqrt(1 + k_m/k_n) of that: up to 1.7 k_n
+  // the step stays; 2.5 and 5 k_n (limits 0.88 and 0.67 of the step) take half of it, 20 k_n
+  // (0.36) a quarter.
+  ASSERT_NEAR(elastic_step_s / (common.bond_step_fraction * elastic_critical_s), 0.61, 0.01);
+  for (const auto& [arm_share, halvings] :
+       {std::pair{0.5, 0}, std::pair{2.5, 1}, std::pair{5.0, 1}, std::pair{20.0, 2}}) {
+    SCOPED_TRACE(arm_share);
+    const dem::ModelSpec viscoelastic = with_maxwell_arm(elastic, arm_share);
+    const double critical_s = bond_critical_step_s(viscoelastic, block);
+    EXPECT_NEAR(critical_s, elastic_critical_s / std::sqrt(1.0 + arm_share),
+                1e-12 * elastic_critical_s);
+    EXPECT_NEAR(bond_critical_step_s(viscoelastic, block, true), elastic_critical_s,
+                1e-12 * elastic_critical_s);
+    dem::Simulation sim(std::make_shared<dem::Model>(viscoelastic));
+    sim.add_body(block.positions_m, block.radii_m, block.types, body_bonds(block), dem::BodyPose{});
+    sim.prepare();
+    EXPECT_NEAR(sim.check_timestep().bond_critical_step_s, critical_s, 1e-12 * critical_s);
+    const double step_s = choose_timestep_s(common, viscoelastic, block);
+    EXPECT_EQ(step_s, elastic_step_s / static_cast<double>(1 << halvings));
+    EXPECT_LE(step_s, common.bond_step_fraction * critical_s);
+  }
+}
+
 // A box wall is 12 triangles spanning its corners.
 TEST(ModelTestsFixtures, BoxWallHasTwelveTriangles) {
   const auto wall = box_wall("b", 2, Vec3(-1, -2, -3), Vec3(1, 2, 3));

@@ -226,8 +226,14 @@ class BondLaw {
   virtual bool compute_batch(const BondBatch& batch) const;
   // Elastic energy held in a bond's state (energy reports; kept out of the step loop).
   [[nodiscard]] virtual double elastic_energy_j(const BondState& state, const Bond& bond) const = 0;
-  // Spring constants (N/m) of this bond, for the timestep check.
+  // Spring constants (N/m) of this bond, for the timestep check: the stiffness a stretch within
+  // one step meets (a visco-elastic law's relaxing arm included).
   [[nodiscard]] virtual double normal_stiffness_n_per_m(const Bond& bond) const = 0;
+  // The normal spring constant left once every relaxing part has relaxed (the long-time one);
+  // the same as normal_stiffness_n_per_m for an elastic law.
+  [[nodiscard]] virtual double relaxed_normal_stiffness_n_per_m(const Bond& bond) const {
+    return normal_stiffness_n_per_m(bond);
+  }
   [[nodiscard]] virtual double shear_stiffness_n_per_m(const Bond& bond) const = 0;
   // Whether the law reads each bond's thickness_m (graded stiffness): the engine then refuses
   // bonds added without one rather than guess.

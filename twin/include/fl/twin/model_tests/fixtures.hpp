@@ -87,10 +87,17 @@ std::vector<dem::BodyBond> body_bonds(const dem::FilletTemplate& fillet);
 dem::FilletTemplate make_block(double radius_m, int nx, int ny, int nz);
 
 // Bond critical step 2/omega of the stiffest particle: omega^2 = bonds x max(k_n, k_t) / m
-// with k = S pi (disk_scale r)^2 (the engine's check_timestep formula).
-double bond_critical_step_s(const dem::ModelSpec& spec, const dem::FilletTemplate& fillet);
+// with k = S pi (disk_scale r)^2 (the engine's check_timestep formula). k_n is the stiffness a
+// stretch within one step meets (a visco-elastic arm included), or with `relaxed` the
+// long-time one.
+double bond_critical_step_s(const dem::ModelSpec& spec, const dem::FilletTemplate& fillet,
+                            bool relaxed = false);
 // rayleigh_fraction x Rayleigh time of the template's spheres, limited to
-// bond_step_fraction x bond critical step.
+// bond_step_fraction x the relaxed bond critical step, then halved until it is within
+// bond_step_fraction of the (instantaneous) bond critical step too. Halving, rather than
+// following the arm's stiffness, keeps the step of a visco-elastic law constant over ranges of
+// its arm stiffness: a fit over it sees a smooth objective, not one whose every point is
+// integrated with its own step (a drop's impacts are chaotic enough to show the difference).
 double choose_timestep_s(const CommonParams& common, const dem::ModelSpec& spec,
                          const dem::FilletTemplate& fillet);
 
