@@ -10,6 +10,7 @@
 #include <random>
 #include <sstream>
 #include <stdexcept>
+#include <variant>
 
 #include "displacement_path.hpp"
 #include "fl/twin/dem/config.hpp"
@@ -175,6 +176,9 @@ Table TwinSlideModel::run(const Dataset& dataset, const Trial& trial) {
   params.common = common_;
   params.common.variant = fillet_variant(trial.conditions, common_.variant);
   params.tilt_rate_deg_per_s = settings_.tilt_rate_deg_per_s;
+  if (const auto rate = trial.conditions.find("tilt_rate"); rate != trial.conditions.end()) {
+    params.tilt_rate_deg_per_s = std::get<double>(rate->second) * 180.0 / std::numbers::pi;
+  }
   params.max_angle_deg = settings_.max_angle_deg;
   dem::ModelSpec& spec = params.common.base_spec;
   const std::uint32_t equipment = model_tests::equipment_type(spec);

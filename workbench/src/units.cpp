@@ -41,6 +41,8 @@ constexpr std::array kUnits{
     Unit{"1/s", Quantity::kRate, 1.0},
     Unit{"1/min", Quantity::kRate, 1.0 / 60.0},
     Unit{"1/h", Quantity::kRate, 1.0 / 3600.0},
+    Unit{"rad/s", Quantity::kAngularSpeed, 1.0},
+    Unit{"deg/s", Quantity::kAngularSpeed, kDegree},
 };
 
 }  // namespace
@@ -67,6 +69,8 @@ std::string_view to_string(Quantity quantity) {
       return "energy";
     case Quantity::kRate:
       return "rate";
+    case Quantity::kAngularSpeed:
+      return "angular speed";
   }
   return "unknown";
 }

@@ -165,6 +165,25 @@ TEST(Dataset, BulkFlowFeedRateIsARate) {
   EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 5, "out of range"));
 }
 
+// A slide rig's tilt rate: an angular speed in either unit, refused as an angle or beyond the
+// slow tilt the test means.
+TEST(Dataset, SlideTiltRateIsAnAngularSpeed) {
+  const DatasetFolder folder;
+  folder.write("a.csv", "onset_angle [deg]\n31.5\n");
+  folder.write("manifest.yaml",
+               manifest("slide", "conditions:\n  tilt_rate: 2 deg/s\n", kOneTrial));
+  const Dataset data = load_dataset(folder.path());
+  EXPECT_DOUBLE_EQ(std::get<double>(data.trials.front().conditions.at("tilt_rate")),
+                   2.0 * std::numbers::pi / 180.0);
+  folder.write("manifest.yaml", manifest("slide", "conditions:\n  tilt_rate: 2 deg\n", kOneTrial));
+  EXPECT_TRUE(
+      has_problem(problems_of(folder.path()), "manifest.yaml", 5, "is not an angular speed"));
+  // 2 rad/s (115 deg/s) is beyond the 90 deg/s the schema allows: a flung fillet, not a slide.
+  folder.write("manifest.yaml",
+               manifest("slide", "conditions:\n  tilt_rate: 2 rad/s\n", kOneTrial));
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 5, "out of range"));
+}
+
 TEST(Dataset, DuplicateTrialIdsAndNoTrials) {
   const DatasetFolder folder;
   folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,0,0\n");

@@ -17,6 +17,7 @@ TEST(Units, QuantitiesConvertToSi) {
   EXPECT_DOUBLE_EQ(length.value->value_si, 0.0125);
   EXPECT_DOUBLE_EQ(parse_quantity("3 deg").value->value_si, std::numbers::pi / 60.0);
   EXPECT_DOUBLE_EQ(parse_quantity("6 kg/min").value->value_si, 0.1);
+  EXPECT_DOUBLE_EQ(parse_quantity("5 deg/s").value->value_si, std::numbers::pi / 36.0);
   EXPECT_DOUBLE_EQ(parse_quantity(" 2 ").value->value_si, 2.0);
   EXPECT_EQ(parse_quantity("2").value->unit.quantity, Quantity::kDimensionless);
 }
@@ -34,7 +35,8 @@ TEST(Units, MalformedQuantitiesSayWhy) {
 TEST(Units, EveryQuantityHasItsSiUnit) {
   for (const Quantity q :
        {Quantity::kTime, Quantity::kLength, Quantity::kAngle, Quantity::kForce, Quantity::kMass,
-        Quantity::kSpeed, Quantity::kMassFlow, Quantity::kEnergy, Quantity::kDimensionless}) {
+        Quantity::kSpeed, Quantity::kMassFlow, Quantity::kEnergy, Quantity::kRate,
+        Quantity::kAngularSpeed, Quantity::kDimensionless}) {
     const auto unit = find_unit(si_unit(q));
     ASSERT_TRUE(unit.has_value()) << to_string(q);
     EXPECT_EQ(unit->to_si, 1.0);

@@ -43,6 +43,21 @@ TEST(SlideTwin, WetFilmActsOnWetTrialsOnlyAndLowersTheOnset) {
   EXPECT_EQ(rows.rows(), data.trials[1].data.rows());
 }
 
+TEST(SlideTwin, ATrialsTiltRateReachesThePlate) {
+  // Trial 0 (144x72x40, dry) written as tilted at 10 deg/s: the twin tilts at that rate, the
+  // same run as one told 10 deg/s for every trial, and not the 5 deg/s one (the plate passes
+  // other angles at each step, so the onset read differs).
+  Dataset data = generate_slide("none").dataset;
+  data.trials.resize(1);
+  Dataset tilted = data;
+  tilted.trials[0].conditions["tilt_rate"] = 10.0 / kDegPerRad;
+  TwinSlideModel by_condition(base_model());
+  TwinSlideModel at_ten(base_model(), SlideSettings{10.0, 80.0});
+  const double onset = onset_deg(by_condition, tilted, 0);
+  EXPECT_DOUBLE_EQ(onset, onset_deg(at_ten, data, 0));
+  EXPECT_NE(onset, onset_deg(by_condition, data, 0));
+}
+
 TEST(SlideTwin, AFilletThatNeverSlidesIsReportedNotFatal) {
   const Dataset all = generate_slide("none").dataset;
   Dataset data = all;

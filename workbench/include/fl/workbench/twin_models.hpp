@@ -27,20 +27,21 @@ class TwinCompressModel final : public TrialModel {
   model_tests::CommonParams common_;
 };
 
-// How the slide twin tilts its plate. 5 deg/s is the thesis' rate; a fillet that has not slid
-// by max_angle_deg is reported as failed (atan 5.7 = 80 deg: no fillet friction is that high).
+// How the slide twin tilts its plate. 5 deg/s is the thesis' rate, taken when a trial has no
+// `tilt_rate` condition; a fillet that has not slid by max_angle_deg is reported as failed
+// (atan 5.7 = 80 deg: no fillet friction is that high).
 struct SlideSettings {
   double tilt_rate_deg_per_s = 5.0;
   double max_angle_deg = 80.0;
 };
 
 // Slide test (thesis 3.4.1): a flexible fillet of the trial's `variant` (default 172x72x32) and
-// `mirrored` flag on a plate tilted until it slides; the onset angle is the answer, the same on
-// every row (the rows are repetitions, the twin is deterministic). The fillet-equipment laws
-// are the spec's: coulomb friction and jkr adhesion keep the spec's values (run_slide's own
-// defaults are not used), and effects in that chain act. The `surface` condition: the spec
-// describes the dry plate; a wet_film law in it is the film a wet plate carries, so it acts on
-// surface=wet trials only and is taken out of the chain for dry ones (no surface: dry).
+// `mirrored` flag on a plate tilted at the trial's `tilt_rate` until it slides; the onset angle is
+// the answer, the same on every row (the rows are repetitions, the twin is deterministic). The
+// fillet-equipment laws are the spec's: coulomb friction and jkr adhesion keep the spec's values
+// (run_slide's own defaults are not used), and effects in that chain act. The `surface` condition:
+// the spec describes the dry plate; a wet_film law in it is the film a wet plate carries, so it
+// acts on surface=wet trials only and is taken out of the chain for dry ones (no surface: dry).
 // Throws std::runtime_error when the fillet has not slid by max_angle_deg.
 class TwinSlideModel final : public TrialModel {
  public:

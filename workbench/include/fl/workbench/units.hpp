@@ -23,6 +23,7 @@ enum class Quantity : std::uint8_t {
   kMassFlow,
   kEnergy,
   kRate,  // counts per time: fillets fed per second
+  kAngularSpeed,
 };
 
 // "length", "mass flow", ...
