@@ -143,6 +143,11 @@ CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args) {
       ->add_option("--position-noise-mm", args.position_noise_mm,
                    "line_tracks: 1-sigma camera position noise")
       ->check(CLI::Range(0.0, 50.0));
+  generate
+      ->add_option("--tilt-rates", args.slide_tilt_rates_deg_per_s,
+                   "slide: tilt rates in deg/s, each trial repeated at each (e.g. 5,20)")
+      ->delimiter(',')
+      ->check(CLI::Range(0.1, 90.0));
   generate->add_option("--fillets", args.fillets_per_trial, "line_tracks: fillets per trial")
       ->check(CLI::Range(1, 100));
   generate
@@ -171,6 +176,7 @@ int generate_command(const GenerateArgs& args) {
   options.fillets_per_trial = args.fillets_per_trial;
   options.truth_starts_at_true_pose = args.truth_starts_at_true_pose;
   options.trials = args.trials;
+  options.slide_tilt_rates_deg_per_s = args.slide_tilt_rates_deg_per_s;
   options.common.base_spec = dem::load_model_spec(default_config("dem.yaml"));
   const GeneratedDataset made = generate_dataset(options);
   write_dataset(made.dataset, args.out);

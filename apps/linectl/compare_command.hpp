@@ -48,6 +48,7 @@ struct GenerateArgs {
   int fillets_per_trial = 5;
   bool truth_starts_at_true_pose = false;
   int trials = 0;  // 0: the experiment's default
+  std::vector<double> slide_tilt_rates_deg_per_s;
 };
 
 struct CalibrateArgs {

@@ -405,7 +405,16 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
         "generator: the compress row interval must be above 0 and at most 5 ms, a tenth of the "
         "third trial's 50 ms ramp");
   }
-  const int trials = options.trials > 0 ? options.trials : (slide || tracks ? 4 : 3);
+  for (const double rate : options.slide_tilt_rates_deg_per_s) {
+    if (!(rate >= 0.1 && rate <= 90.0)) {
+      throw std::invalid_argument("generator: a slide tilt rate must be 0.1 to 90 deg/s, not " +
+                                  detail::significant(rate, 6));
+    }
+  }
+  const auto rates_per_trial =
+      static_cast<int>(std::max<std::size_t>(1, options.slide_tilt_rates_deg_per_s.size()));
+  const int trials =
+      options.trials > 0 ? options.trials : (slide ? 4 * rates_per_trial : (tracks ? 4 : 3));
   std::mt19937_64 random(options.seed);
   GeneratedDataset made;
   const std::vector<EffectRange>& effects = effects_of(options.experiment);
@@ -460,7 +469,16 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
     // Compress: ramps of 0.2, 0.1, 0.05 s, ...: the rate dependence shows.
     Trial trial;
     if (slide) {
-      trial = slide_trial(k, options.repetitions);
+      const std::vector<double>& rates = options.slide_tilt_rates_deg_per_s;
+      if (rates.empty()) {
+        trial = slide_trial(k, options.repetitions);
+      } else {
+        const auto per_trial = static_cast<int>(rates.size());
+        const double rate = rates[static_cast<std::size_t>(k % per_trial)];
+        trial = slide_trial(k / per_trial, options.repetitions);
+        trial.id += "_" + detail::significant(rate, 3) + "dps";
+        trial.conditions["tilt_rate"] = rate * std::numbers::pi / 180.0;
+      }
     } else if (drop) {
       trial = drop_trial(k);
     } else if (bend) {

@@ -121,6 +121,36 @@ TEST(SlideGenerator, WithoutAHiddenEffectTheBaseModelSitsAtTheNoise) {
   EXPECT_NEAR(test::angle_score(made.dataset, {}), 1.0, 0.35);  // as the truth model above
 }
 
+TEST(SlideGenerator, TiltRatesRepeatEveryTrialAtEachRate) {
+  GeneratorOptions options;
+  options.experiment = ExperimentType::kSlide;
+  options.common = base_model();
+  options.effect = "none";
+  options.angle_noise_deg = 0.0;
+  options.repetitions = 1;
+  options.trials = 4;  // the 144x72x40 fillet, dry and wet, each at 5 and 20 deg/s
+  options.slide_tilt_rates_deg_per_s = {5.0, 20.0};
+  const Dataset data = generate_dataset(options).dataset;
+  ASSERT_EQ(data.trials.size(), 4U);
+  EXPECT_EQ(data.trials[0].id, "s144x72x40_dry_5dps");
+  EXPECT_EQ(data.trials[1].id, "s144x72x40_dry_20dps");
+  EXPECT_EQ(data.trials[3].id, "s144x72x40_wet_20dps");
+  EXPECT_DOUBLE_EQ(std::get<double>(data.trials[1].conditions.at("tilt_rate")), 20.0 / kDegPerRad);
+  // Clean onsets: the 5 deg/s one is the twin's default run (23.0 deg), and at 20 deg/s the
+  // plate tilts further while the fillet accelerates over its 10 mm (25.2 deg): 2.2 deg later;
+  // 1 deg is half of that and twenty times the 0.05 deg a step of the slower tilt resolves.
+  TwinSlideModel twin(base_model());
+  Dataset at_default = data;
+  at_default.trials[0].conditions.erase("tilt_rate");
+  const auto onset = [](const Dataset& d, std::size_t k) {
+    return d.trials[k].data.at("onset_angle").values_si.front() * kDegPerRad;
+  };
+  EXPECT_DOUBLE_EQ(onset(data, 0), onset_deg(twin, at_default, 0));
+  EXPECT_GT(onset(data, 1), onset(data, 0) + 1.0);
+  options.slide_tilt_rates_deg_per_s = {5.0, 200.0};
+  EXPECT_THROW((void)generate_dataset(options), std::invalid_argument);
+}
+
 TEST(SlideGenerator, RandomChoiceIsSeededAndCoversTheCandidates) {
   GeneratorOptions options;
   options.experiment = ExperimentType::kSlide;
