@@ -37,6 +37,11 @@ struct RunSums {
 // within three standard deviations of sigma^2 chi^2(n-2)/(n-2) above sigma^2.
 constexpr std::size_t kMinPieceRows = 4;
 
+// The noise is the median of the rows' offsets from their neighbours' line, and a corner
+// spoils up to two of them: from 32 rows it stays the noise's for up to seven corners. A
+// shorter log is a slow one by any measure and is followed as logged.
+constexpr std::size_t kMinSmoothedRows = 32;
+
 bool straight_within_noise(double rss, std::size_t rows, double noise_m) {
   const double dof = static_cast<double>(rows) - 2.0;
   return rss / dof <= noise_m * noise_m * (1.0 + 3.0 * std::sqrt(2.0 / dof));
@@ -143,17 +148,19 @@ constexpr int kKnotSearchStepsPerRow = 10;
 constexpr int kKnotSearchRows = 3;
 
 // Moves each inner knot to the time where the spline, its neighbours' values held, leaves the
-// least squares over the two pieces it joins (each keeping two rows at least).
+// least squares over the two pieces it joins, each keeping two rows at least. The knots are
+// moved in order, so the rows of the left piece start at its knot's new time.
 void place_knots(const std::vector<double>& time_s, const std::vector<double>& displacement_m,
                  const std::vector<std::size_t>& knot_rows, LinearSpline& spline) {
   for (std::size_t j = 1; j + 1 < knot_rows.size(); ++j) {
     const std::size_t row = knot_rows[j];
-    const std::size_t lowest =
-        std::max(knot_rows[j - 1] + 2, row - std::min<std::size_t>(row, kKnotSearchRows));
-    const std::size_t highest = std::min(knot_rows[j + 1] - 2, row + kKnotSearchRows);
-    if (lowest > highest) continue;
-    const std::size_t first = knot_rows[j - 1];
+    const auto first = static_cast<std::size_t>(
+        std::lower_bound(time_s.begin(), time_s.end(), spline.knot_s[j - 1]) - time_s.begin());
     const std::size_t last = knot_rows[j + 1];
+    const std::size_t lowest =
+        std::max(first + 2, row - std::min<std::size_t>(row, kKnotSearchRows));
+    const std::size_t highest = std::min(last - 2, row + kKnotSearchRows);
+    if (lowest > highest) continue;
     const double left_s = spline.knot_s[j - 1];
     const double right_s = spline.knot_s[j + 1];
     const double left_m = spline.value_m[j - 1];
@@ -209,7 +216,21 @@ std::vector<double> linear_spline_fit(const std::vector<double>& time_s,
   LinearSpline spline;
   for (const std::size_t row : knot_rows) spline.knot_s.push_back(time_s[row]);
   spline.value_m = spline_values(time_s, displacement_m, spline.knot_s);
+  const std::vector<double> knots_at_rows_s = spline.knot_s;
   place_knots(time_s, displacement_m, knot_rows, spline);
+  // Every piece must keep rows for the normal equations: should a placement ever break that,
+  // the knots stay at their rows.
+  std::size_t first_in_piece = 0;
+  for (std::size_t j = 1; j < spline.knot_s.size(); ++j) {
+    const bool ordered = spline.knot_s[j] > spline.knot_s[j - 1];
+    while (first_in_piece < time_s.size() && time_s[first_in_piece] < spline.knot_s[j - 1]) {
+      ++first_in_piece;
+    }
+    if (!ordered || first_in_piece >= time_s.size() || time_s[first_in_piece] >= spline.knot_s[j]) {
+      spline.knot_s = knots_at_rows_s;
+      break;
+    }
+  }
   spline.value_m = spline_values(time_s, displacement_m, spline.knot_s);
   std::vector<double> path(time_s.size());
   for_each_row_in_pieces(time_s, spline.knot_s, [&](std::size_t row, std::size_t piece, double u) {
@@ -230,16 +251,24 @@ double median_row_interval_s(const std::vector<double>& time_s) {
 
 }  // namespace
 
-double displacement_noise_m(const std::vector<double>& displacement_m) {
+double displacement_noise_m(const std::vector<double>& time_s,
+                            const std::vector<double>& displacement_m) {
+  const std::vector<double>& t = time_s;
   const std::vector<double>& d = displacement_m;
-  if (d.size() < 3) return 0.0;
-  std::vector<double> second(d.size() - 2);
-  for (std::size_t k = 0; k + 2 < d.size(); ++k) {
-    second[k] = std::abs(d[k + 2] - 2.0 * d[k + 1] + d[k]);
+  const std::size_t rows = std::min(t.size(), d.size());
+  if (rows < 3) return 0.0;
+  // Each middle row against the line through its neighbours, in time: d1 - (w0 d0 + w2 d2)
+  // has a white noise's sigma times sqrt(1 + w0^2 + w2^2).
+  std::vector<double> off(rows - 2);
+  for (std::size_t k = 0; k + 2 < rows; ++k) {
+    const double span = t[k + 2] - t[k];
+    const double w0 = (t[k + 2] - t[k + 1]) / span;
+    const double w2 = (t[k + 1] - t[k]) / span;
+    off[k] = std::abs(d[k + 1] - w0 * d[k] - w2 * d[k + 2]) / std::sqrt(1.0 + w0 * w0 + w2 * w2);
   }
-  const auto middle = second.begin() + static_cast<std::ptrdiff_t>(second.size() / 2);
-  std::nth_element(second.begin(), middle, second.end());
-  return *middle / (0.6745 * std::sqrt(6.0));
+  const auto middle = off.begin() + static_cast<std::ptrdiff_t>(off.size() / 2);
+  std::nth_element(off.begin(), middle, off.end());
+  return *middle / 0.6745;
 }
 
 double loading_rate_m_per_s(const std::vector<double>& time_s,
@@ -255,22 +284,34 @@ double loading_rate_m_per_s(const std::vector<double>& time_s,
 }
 
 double rate_window_half_s(const std::vector<double>& time_s,
-                          const std::vector<double>& displacement_m, double rate_noise_share) {
+                          const std::vector<double>& displacement_m, double rate_noise_share,
+                          std::optional<double> known_noise_m) {
   const double rate = loading_rate_m_per_s(time_s, displacement_m);
   if (!(rate > 0.0)) return 0.0;
-  return std::sqrt(2.0) * displacement_noise_m(displacement_m) / (2.0 * rate_noise_share * rate);
+  const double noise_m =
+      known_noise_m ? *known_noise_m : displacement_noise_m(time_s, displacement_m);
+  return std::sqrt(2.0) * noise_m / (2.0 * rate_noise_share * rate);
 }
 
 std::vector<double> smoothed_displacement_m(const std::vector<double>& time_s,
-                                            const std::vector<double>& displacement_m) {
+                                            const std::vector<double>& displacement_m,
+                                            std::optional<double> known_noise_m) {
   if (time_s.size() != displacement_m.size()) {
     throw std::invalid_argument("smoothed_displacement_m: " + std::to_string(time_s.size()) +
                                 " times for " + std::to_string(displacement_m.size()) +
                                 " displacements");
   }
-  if (time_s.size() < 2 * kMinPieceRows) return displacement_m;
-  const double noise_m = displacement_noise_m(displacement_m);
-  const double half_s = rate_window_half_s(time_s, displacement_m, kPathRateNoiseShare);
+  for (std::size_t k = 0; k < time_s.size(); ++k) {
+    if (!std::isfinite(time_s[k]) || !std::isfinite(displacement_m[k]) ||
+        (k > 0 && !(time_s[k] > time_s[k - 1]))) {
+      throw std::invalid_argument("smoothed_displacement_m: row " + std::to_string(k) +
+                                  " is not finite or not later than the row before");
+    }
+  }
+  if (time_s.size() < kMinSmoothedRows) return displacement_m;
+  const double noise_m =
+      known_noise_m ? *known_noise_m : displacement_noise_m(time_s, displacement_m);
+  const double half_s = rate_window_half_s(time_s, displacement_m, kPathRateNoiseShare, noise_m);
   // Rows already quieter than the target (a clean trial, a slow logger) stay as measured.
   if (!(noise_m > 0.0) || !(half_s >= median_row_interval_s(time_s))) return displacement_m;
   return linear_spline_fit(time_s, displacement_m, piece_ends(time_s, displacement_m, noise_m));

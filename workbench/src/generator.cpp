@@ -532,8 +532,9 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
     if (noisy_displacement) {
       // The truth ran on the true path; the log shows the encoder's reading of it.
       std::normal_distribution<double> displacement_noise(0.0, displacement_noise_si);
-      for (double& value : trial.data.channels[1].values_si) {  // time, displacement, force
-        value += displacement_noise(random);
+      for (Channel& logged : trial.data.channels) {
+        if (logged.name != "displacement") continue;
+        for (double& value : logged.values_si) value += displacement_noise(random);
       }
     }
     data.trials.push_back(std::move(trial));

@@ -68,8 +68,8 @@ TEST(Generator, WithoutAHiddenEffectTheBaseModelSitsAtTheNoise) {
 TEST(Generator, AFastLoggersDisplacementNoiseLeavesTheTruthAtTheNoise) {
   // A 10 kHz log with 0.5 um of encoder noise on the displacement, as an outside lab's was.
   // Row by row that noise is a plate speed of sqrt(2) 0.5 um / 0.1 ms = 7 mm/s, near the
-  // 2.5 to 10 mm/s loading rates, and a plate driven by it set the undamped bonds ringing
-  // (4.6 noise sigmas for a correct model); the twin drives the plate along the crosshead's
+  // 2.5 to 10 mm/s loading rates, and a plate driven by it shook the stiff plate contact
+  // (8.4 noise sigmas for a correct model); the twin drives the plate along the crosshead's
   // path with the noise taken out (docs/measurements.md).
   for (const std::string effect : {"none", "bpm_viscoelastic"}) {
     SCOPED_TRACE(effect);
@@ -83,7 +83,7 @@ TEST(Generator, AFastLoggersDisplacementNoiseLeavesTheTruthAtTheNoise) {
     options.common = base_model();
     const GeneratedDataset made = generate_dataset(options);
     ASSERT_EQ(made.dataset.noise_si.at("displacement"), 0.5e-6);
-    // Three sigmas of RMS/sigma over the ~8000 force rows is 0.025; the path's own error (a
+    // Three sigmas of RMS/sigma over the 10,003 force rows is 0.02; the path's own error (a
     // sixth of a micrometre through the block's ~1.2 N/mm) adds 0.2 mN, under 0.001 of a
     // sigma: the truth ends at the noise as on a clean log (0.15 there, for 200 rows).
     EXPECT_NEAR(test::force_score(made.dataset, made.truth), 1.0, 0.03);
