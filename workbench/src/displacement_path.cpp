@@ -16,7 +16,9 @@ namespace {
 constexpr double kPathRateNoiseShare = 0.01;
 
 // Sums of one run of rows, about a fixed origin (long double: the prefix sums of a long trial
-// are differenced for short runs).
+// are differenced for short runs, which a 53-bit double does not carry for 60,000 rows).
+static_assert(std::numeric_limits<long double>::digits >= 64,
+              "the path fit's prefix sums need an extended long double (x86-64, aarch64)");
 struct RunSums {
   long double n = 0, t = 0, tt = 0, d = 0, dd = 0, td = 0;
 
