@@ -241,14 +241,19 @@ std::vector<double> linear_spline_fit(const std::vector<double>& time_s,
   return path;
 }
 
+// The upper middle of the values (0 for none); reorders them.
+double median_of(std::vector<double>& values) {
+  if (values.empty()) return 0.0;
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
 double median_row_interval_s(const std::vector<double>& time_s) {
   std::vector<double> intervals;
   intervals.reserve(time_s.size());
   for (std::size_t k = 1; k < time_s.size(); ++k) intervals.push_back(time_s[k] - time_s[k - 1]);
-  if (intervals.empty()) return 0.0;
-  const auto middle = intervals.begin() + static_cast<std::ptrdiff_t>(intervals.size() / 2);
-  std::nth_element(intervals.begin(), middle, intervals.end());
-  return *middle;
+  return median_of(intervals);
 }
 
 }  // namespace
@@ -268,9 +273,7 @@ double displacement_noise_m(const std::vector<double>& time_s,
     const double w2 = (t[k + 1] - t[k]) / span;
     off[k] = std::abs(d[k + 1] - w0 * d[k] - w2 * d[k + 2]) / std::sqrt(1.0 + w0 * w0 + w2 * w2);
   }
-  const auto middle = off.begin() + static_cast<std::ptrdiff_t>(off.size() / 2);
-  std::nth_element(off.begin(), middle, off.end());
-  return *middle / 0.6745;
+  return median_of(off) / 0.6745;
 }
 
 double loading_rate_m_per_s(const std::vector<double>& time_s,

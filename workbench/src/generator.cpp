@@ -462,7 +462,8 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
     data.noise_si["y"] = noise_si;
     data.noise_si["angle"] = track_angle_noise_si;
   }
-  const bool noisy_displacement = !slide && !drop && !bend && !tracks && displacement_noise_si > 0;
+  const bool noisy_displacement =
+      options.experiment == ExperimentType::kCompress && displacement_noise_si > 0.0;
   if (noisy_displacement) data.noise_si["displacement"] = displacement_noise_si;
   std::normal_distribution<double> noise(0.0, noise_si);
   for (int k = 0; k < trials; ++k) {
