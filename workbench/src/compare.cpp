@@ -123,7 +123,8 @@ std::vector<std::string_view> response_channels(ExperimentType type) {
   return {};
 }
 
-std::vector<std::string> phases_of(ExperimentType type, const Trial& trial) {
+std::vector<std::string> phases_of(ExperimentType type, const Trial& trial,
+                                   std::optional<double> stated_displacement_noise_m) {
   const std::size_t rows = trial.data.rows();
   if (type == ExperimentType::kDrop) return drop_phases(trial);
   std::vector<std::string> phase(rows, "all");
@@ -134,8 +135,10 @@ std::vector<std::string> phases_of(ExperimentType type, const Trial& trial) {
   // displacement noise under kPhaseRateNoiseShare of its loading rate: from neighbouring rows, a
   // fast logger's noise made loading rows flicker between loading, unloading and hold, while a
   // window of fixed length blurred a short ramp before a long hold. The rate noise of a window
-  // of +-h is sqrt(2) sigma / (2 h).
-  const double half_window_s = detail::rate_window_half_s(t, d, kPhaseRateNoiseShare);
+  // of +-h is sqrt(2) sigma / (2 h). A stated noise wins over the rows' own estimate, which
+  // a filtering logger's correlated noise leaves too low (the window then too short).
+  const double half_window_s =
+      detail::rate_window_half_s(t, d, kPhaseRateNoiseShare, stated_displacement_noise_m);
   std::vector<double> rate(rows, 0.0);
   double fastest = 0.0;
   std::size_t first = 0;  // the first row in the window, then the last (times increase)
@@ -219,7 +222,8 @@ CompareReport compare(const Dataset& dataset, TrialModel& model) {
     }
     TrialTrace trace;
     trace.trial = trial.id;
-    trace.phase = phases_of(dataset.experiment, trial);
+    trace.phase =
+        phases_of(dataset.experiment, trial, detail::stated_displacement_noise_m(dataset));
     const Channel* time = trial.data.find("time");
     const Channel* opening = trial.data.find("opening");
     if (time == nullptr) {

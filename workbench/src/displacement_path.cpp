@@ -288,6 +288,12 @@ double loading_rate_m_per_s(const std::vector<double>& time_s,
   return rate;
 }
 
+std::optional<double> stated_displacement_noise_m(const Dataset& dataset) {
+  const auto noise = dataset.noise_si.find("displacement");
+  if (noise == dataset.noise_si.end()) return std::nullopt;
+  return noise->second;
+}
+
 double rate_window_half_s(const std::vector<double>& time_s,
                           const std::vector<double>& displacement_m, double rate_noise_share,
                           std::optional<double> known_noise_m) {

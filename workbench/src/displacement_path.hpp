@@ -6,7 +6,13 @@
 #include <optional>
 #include <vector>
 
+#include "fl/workbench/dataset.hpp"
+
 namespace fl::workbench::detail {
+
+// The displacement noise (1 sigma, m) the dataset's manifest states; none if it states none.
+// Where stated it replaces the rows' own estimate, for the phases and the plate path alike.
+std::optional<double> stated_displacement_noise_m(const Dataset& dataset);
 
 // The displacement noise of a trial, 1 sigma, from its own rows: the median offset of each
 // row from the straight line through its two neighbours, in time (a ramp's is zero, a corner

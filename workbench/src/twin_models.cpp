@@ -144,12 +144,8 @@ Table TwinCompressModel::run(const Dataset& dataset, const Trial& trial) {
   // The plate follows the crosshead's path, not the logger's noise on it: row by row, a fast
   // logger's noise became plate speeds as large as the loading rate, and the stiff plate
   // contact answered them (a correct model scored 8.4 noise sigmas on a generated 10 kHz log).
-  std::optional<double> known_noise_m;
-  if (const auto noise = dataset.noise_si.find("displacement"); noise != dataset.noise_si.end()) {
-    known_noise_m = noise->second;
-  }
-  const std::vector<double> path_m =
-      detail::smoothed_displacement_m(time_s, displacement_m, known_noise_m);
+  const std::vector<double> path_m = detail::smoothed_displacement_m(
+      time_s, displacement_m, detail::stated_displacement_noise_m(dataset));
   for (const double d : path_m) params.profile_travel_m.push_back(d - path_m[0]);
   const model_tests::CompressResult result = model_tests::run_compress(params);
   if (result.series.size() != time_s.size()) {

@@ -125,6 +125,55 @@ TEST(Compare, PhasesHoldUnderAFastLoggersDisplacementNoise) {
   EXPECT_EQ(wrong, 0);
 }
 
+TEST(Compare, PhasesTakeTheStatedNoiseOfAFilteringLogger) {
+  // 10 kHz: loading at 1 mm/s for 5 s, then a 1 s hold. The logger averages its last 16
+  // samples of a 2 um white noise: 0.5 um left (2 / sqrt(16)), but neighbouring rows share
+  // 15 of their 16 samples, so the rows' own estimate (from second differences) reads about
+  // a fifth of it, the window comes out about a fifth as wide and the hold's rate noise near
+  // the 5 % hold threshold: hold rows flicker. The manifest states the 0.5 um; compare must
+  // size the window from it, as the compress twin's plate path does.
+  constexpr int kAveraged = 16;
+  constexpr double kStatedNoiseM = 2e-6 / 4.0;  // 2 um / sqrt(16)
+  std::mt19937 random(5);
+  std::normal_distribution<double> white_m(0.0, 2e-6);
+  std::vector<double> last(kAveraged);
+  for (double& sample : last) sample = white_m(random);
+  std::vector<double> t, d, f;
+  for (int k = 0; k <= 60000; ++k) {
+    const double time = 1e-4 * k;
+    last[static_cast<std::size_t>(k % kAveraged)] = white_m(random);
+    double filtered_m = 0.0;
+    for (const double sample : last) filtered_m += sample / kAveraged;
+    t.push_back(time);
+    d.push_back(1e-3 * std::min(time, 5.0) + filtered_m);
+    f.push_back(kStiffnessNPerM * d.back());
+  }
+  Trial trial;
+  trial.id = "filtered";
+  trial.data.channels = {channel("time", "s", t), channel("displacement", "mm", d),
+                         channel("force", "N", f)};
+  trial.data.lines.resize(t.size());
+  // Rows within 60 ms of the corner may read either way (the window is about +-35 ms).
+  auto wrong_rows = [&](const std::vector<std::string>& phase) {
+    int wrong = 0;
+    for (std::size_t k = 0; k < t.size(); ++k) {
+      if (std::abs(t[k] - 5.0) <= 0.06) continue;
+      wrong += phase[k] != (t[k] < 5.0 ? "loading" : "hold") ? 1 : 0;
+    }
+    return wrong;
+  };
+  // Without the stated noise the labels flicker: the failure the stated noise mends.
+  EXPECT_GT(wrong_rows(phases_of(ExperimentType::kCompress, trial)), 100);
+
+  Dataset data = make_dataset({trial});
+  data.noise_si["displacement"] = kStatedNoiseM;
+  SpringModel spring_model;
+  const CompareReport report = compare(data, spring_model);
+  ASSERT_EQ(report.traces.size(), 1U);
+  ASSERT_EQ(report.traces[0].phase.size(), t.size());
+  EXPECT_EQ(wrong_rows(report.traces[0].phase), 0);
+}
+
 TEST(Compare, PhasesKeepAShortRampBeforeALongHold) {
   // A relaxation test at 100 Hz: 1 s of loading at 1 mm/s, then 100 s of hold, clean and with
   // 0.5 um of noise. A window of a fixed share of the test (1 s at 1 %) labelled the whole ramp

@@ -7,6 +7,7 @@
 //   report.cells.front()                               // the worst segment
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,8 +36,13 @@ std::vector<std::string_view> response_channels(ExperimentType type);
 
 // Phase of each row: compress has "loading", "hold" and "unloading" (from the measured
 // displacement's rate); drop has "fall", "landing" (100 ms from the impact, which the
-// drop_height gives) and "settling"; other experiments one phase, "all".
-std::vector<std::string> phases_of(ExperimentType type, const Trial& trial);
+// drop_height gives) and "settling"; other experiments one phase, "all". A compress trial's
+// rates are read over a window sized from its displacement noise: the
+// `stated_displacement_noise_m` (the manifest's, as the compress twin's plate path takes it)
+// when given, else the rows' own estimate.
+std::vector<std::string> phases_of(
+    ExperimentType type, const Trial& trial,
+    std::optional<double> stated_displacement_noise_m = std::nullopt);
 
 struct ChannelTrace {
   std::string channel;
