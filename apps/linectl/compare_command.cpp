@@ -73,26 +73,28 @@ void add_model_options(CLI::App& command, CompareArgs& args) {
       ->check(CLI::Range(1, 64));
 }
 
-// compare and diagnose: the ensemble's size, for line-track datasets only.
+// compare and diagnose: the ensemble's size, for line-track and slide datasets.
 void add_ensemble_option(CLI::App& command, CompareArgs& args) {
   command
       .add_option("--ensemble", args.ensemble,
-                  "line_tracks: twin runs per trial, from first poses jittered by the noise; "
-                  "the mean is compared and the spread added to the noise")
+                  "twin runs per trial: line_tracks from first poses jittered by the noise, "
+                  "slide from placements turned within +-5 deg; the mean is compared and the "
+                  "spread added to the noise")
       ->check(CLI::Range(1, 64));
 }
 
 // The twin settings of the arguments; nullopt (reported) for an ensemble of a dataset that is
-// not line tracks.
+// neither line tracks nor slide.
 std::optional<TwinSettings> twin_settings(const CompareArgs& args, const Dataset& dataset) {
   TwinSettings settings;
-  if (args.ensemble > 1 && dataset.experiment != ExperimentType::kLineTracks) {
-    spdlog::error("{}: --ensemble runs line_tracks datasets, and this one is {}", args.dataset,
-                  to_string(dataset.experiment));
+  if (args.ensemble > 1 && dataset.experiment != ExperimentType::kLineTracks &&
+      dataset.experiment != ExperimentType::kSlide) {
+    spdlog::error("{}: --ensemble runs line_tracks and slide datasets, and this one is {}",
+                  args.dataset, to_string(dataset.experiment));
     return std::nullopt;
   }
   if (const std::string_view unknown = line_tracks_channel_without_noise(dataset);
-      args.ensemble > 1 && !unknown.empty()) {
+      args.ensemble > 1 && dataset.experiment == ExperimentType::kLineTracks && !unknown.empty()) {
     spdlog::error(
         "{}: --ensemble jitters the first poses by the manifest's noise, and it gives none for "
         "'{}'",
@@ -100,6 +102,7 @@ std::optional<TwinSettings> twin_settings(const CompareArgs& args, const Dataset
     return std::nullopt;
   }
   settings.line_tracks.ensemble_runs = args.ensemble;
+  settings.slide.ensemble_runs = args.ensemble;
   return settings;
 }
 

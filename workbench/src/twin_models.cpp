@@ -160,6 +160,15 @@ Table TwinCompressModel::run(const Dataset& dataset, const Trial& trial) {
 TwinSlideModel::TwinSlideModel(model_tests::CommonParams common, SlideSettings settings)
     : common_(std::move(common)), settings_(settings) {
   if (common_.base_spec.materials.empty()) common_.base_spec = dem::appendix_b_model_spec();
+  if (settings_.ensemble_runs < 1) {
+    throw std::invalid_argument("the slide ensemble needs one run or more, not " +
+                                std::to_string(settings_.ensemble_runs));
+  }
+  if (!(settings_.placement_tolerance_deg >= 0.0 && settings_.placement_tolerance_deg <= 45.0)) {
+    throw std::invalid_argument(
+        "the slide ensemble's placement tolerance must be 0 to 45 deg, not " +
+        std::to_string(settings_.placement_tolerance_deg));
+  }
 }
 
 std::string TwinSlideModel::describe() const {
@@ -167,6 +176,10 @@ std::string TwinSlideModel::describe() const {
   text << "DEM twin, slide of a flexible fillet of " << common_.sub_particle_radius_m * 1e3
        << " mm sub-particles; fillet-equipment laws:";
   text << equipment_chain_text(common_.base_spec);
+  if (settings_.ensemble_runs > 1) {
+    text << "; mean of " << settings_.ensemble_runs << " placements within +-"
+         << settings_.placement_tolerance_deg << " deg";
+  }
   return text.str();
 }
 
@@ -217,16 +230,37 @@ Table TwinSlideModel::run(const Dataset& dataset, const Trial& trial) {
   }
   params.friction_coefficient = *friction;
   params.surface_energy_j_per_m2 = surface_energy.value_or(0.0);  // no jkr: no adhesion
-  const model_tests::SlideResult result = model_tests::run_slide(params);
-  if (!result.slide_angle_deg) {
-    std::ostringstream reason;
-    reason << "the fillet has not slid by " << settings_.max_angle_deg << " deg";
-    throw std::runtime_error(reason.str());
-  }
   constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-  return single_channel_answer(
-      trial, "onset_angle",
-      std::vector<double>(trial.data.rows(), *result.slide_angle_deg * kRadPerDeg));
+  const int runs = settings_.ensemble_runs;
+  double sum_rad = 0.0;
+  double sum_sq_rad = 0.0;
+  for (int member = 0; member < runs; ++member) {
+    // Evenly spaced over the tolerance, centred (one run: laid straight, as before).
+    const double share = (member + 0.5) / runs;
+    params.placement_yaw_rad = settings_.placement_tolerance_deg * kRadPerDeg * (2.0 * share - 1.0);
+    const model_tests::SlideResult result = model_tests::run_slide(params);
+    if (!result.slide_angle_deg) {
+      std::ostringstream reason;
+      reason << "the fillet has not slid by " << settings_.max_angle_deg << " deg";
+      if (runs > 1) reason << " (placement " << params.placement_yaw_rad / kRadPerDeg << " deg)";
+      throw std::runtime_error(reason.str());
+    }
+    const double onset_rad = *result.slide_angle_deg * kRadPerDeg;
+    sum_rad += onset_rad;
+    sum_sq_rad += onset_rad * onset_rad;
+  }
+  const auto n = static_cast<double>(runs);
+  const double mean_rad = sum_rad / n;
+  Table table =
+      single_channel_answer(trial, "onset_angle", std::vector<double>(trial.data.rows(), mean_rad));
+  if (runs > 1) {
+    // How far one more placement would land from the mean, 1 sigma (as the line tracks').
+    const double variance = std::max(0.0, (sum_sq_rad - n * mean_rad * mean_rad) / (n - 1.0));
+    table.channels.push_back(
+        {"onset_angle_spread", trial.data.at("onset_angle").unit,
+         std::vector<double>(trial.data.rows(), std::sqrt(variance * (1.0 + 1.0 / n)))});
+  }
+  return table;
 }
 
 TwinDropModel::TwinDropModel(model_tests::CommonParams common) : common_(std::move(common)) {
@@ -530,7 +564,7 @@ std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
     case ExperimentType::kCompress:
       return std::make_unique<TwinCompressModel>(common);
     case ExperimentType::kSlide:
-      return std::make_unique<TwinSlideModel>(common);
+      return std::make_unique<TwinSlideModel>(common, settings.slide);
     case ExperimentType::kDrop:
     case ExperimentType::kSettle:
       return std::make_unique<TwinDropModel>(common);

@@ -41,7 +41,7 @@ SlideResult run_slide(const SlideParams& params) {
   SlideResult result;
   result.timestep_s = spec.timestep_s;
   dem::Simulation sim(std::make_shared<dem::Model>(spec));
-  add_fillet(sim, fillet, Eigen::Quaterniond::Identity(), 0.0, 0.0, 0.0005);
+  add_fillet(sim, fillet, yaw_pitch_roll(params.placement_yaw_rad, 0.0, 0.0), 0.0, 0.0, 0.0005);
   if (params.rigid) {
     // bpm has no bending moment: bonded neighbours can counter-rotate like gears and the
     // clump rolls instead of sliding (see DemFriction in twin/tests/dem). A solid body's

@@ -58,6 +58,44 @@ TEST(SlideTwin, ATrialsTiltRateReachesThePlate) {
   EXPECT_NE(onset, onset_deg(by_condition, data, 0));
 }
 
+TEST(SlideTwin, AnEnsembleShowsTheScatterOfStickAndSlipAndNotOfCoulomb) {
+  // Trial 0: the 144x72x40 variant, dry, at 5 deg/s. Four placements within +-5 deg.
+  Dataset data = generate_slide("none").dataset;
+  data.trials.resize(1);
+  const SlideSettings four{5.0, 80.0, 4, 5.0};
+  auto answer = [&](const model_tests::CommonParams& model, const SlideSettings& settings) {
+    TwinSlideModel twin(model, settings);
+    return twin.run(data, data.trials[0]);
+  };
+  auto spread_deg = [](const Table& table) {
+    return table.at("onset_angle_spread").values_si.front() * kDegPerRad;
+  };
+  // Coulomb: the onset turns on the placement's geometry only, smoothly and little (0.03 to
+  // 0.04 deg measured over +-4 deg), under a third of the 0.3 deg inclinometer noise.
+  const Table coulomb = answer(base_model(), four);
+  ASSERT_NE(coulomb.find("onset_angle_spread"), nullptr);
+  EXPECT_LT(spread_deg(coulomb), 0.1);
+  // Static against kinetic friction (mu_s 0.83 from the generator's range, its stick speed
+  // 10.6 mm/s): where each contact sticks or slips turns on the placement, and the onset
+  // scatters by about 0.5 deg (0.47 to 0.60 measured): over twice the coulomb bound.
+  model_tests::CommonParams sticky = base_model();
+  sticky.base_spec = with_contact_effect(
+      sticky.base_spec, {"static_kinetic_friction",
+                         {{"static_friction_coefficient", 0.83}, {"stick_speed_m_per_s", 0.0106}}});
+  const Table stick_slip = answer(sticky, four);
+  EXPECT_GT(spread_deg(stick_slip), 0.2);
+  // Every row carries the mean and the spread (the rows are repetitions).
+  EXPECT_EQ(stick_slip.at("onset_angle").values_si.size(), data.trials[0].data.rows());
+  EXPECT_EQ(stick_slip.at("onset_angle_spread").values_si.size(), data.trials[0].data.rows());
+  // One run a trial answers no spread, and the ensemble is named in the model's description.
+  EXPECT_EQ(answer(sticky, SlideSettings{}).find("onset_angle_spread"), nullptr);
+  EXPECT_NE(TwinSlideModel(sticky, four).describe().find("mean of 4 placements"),
+            std::string::npos);
+  // Settings that cannot run are refused by name.
+  EXPECT_THROW(TwinSlideModel(sticky, SlideSettings{5.0, 80.0, 0, 5.0}), std::invalid_argument);
+  EXPECT_THROW(TwinSlideModel(sticky, SlideSettings{5.0, 80.0, 4, 60.0}), std::invalid_argument);
+}
+
 TEST(SlideTwin, AFilletThatNeverSlidesIsReportedNotFatal) {
   const Dataset all = generate_slide("none").dataset;
   Dataset data = all;

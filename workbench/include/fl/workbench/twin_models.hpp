@@ -30,14 +30,27 @@ class TwinCompressModel final : public TrialModel {
 // How the slide twin tilts its plate. 5 deg/s is the thesis' rate, taken when a trial has no
 // `tilt_rate` condition; a fillet that has not slid by max_angle_deg is reported as failed
 // (atan 5.7 = 80 deg: no fillet friction is that high).
+// With ensemble_runs > 1 each trial is slid that many times, the fillet laid turned about the
+// vertical at evenly spaced angles within +-placement_tolerance_deg (a hand placement's), and
+// the answer is the members' mean with their spread as the channel onset_angle_spread (the
+// sample standard deviation times sqrt(1 + 1/runs), as the line-tracks ensemble), which compare
+// adds to the noise. Why: one run a trial is one draw where the onset turns on how the fillet
+// lies. Where contacts stick and slip (static_kinetic_friction) it turns chaotically: by 0.5
+// deg RMS for +-4 deg of turn on the 144 mm fillet, and by up to 0.9 deg between stick speeds
+// 0.3 % apart. Under coulomb the 144 mm fillet's onset moves by under 0.05 deg, but the 172 mm
+// one starts to slide in one of two ways, 0.45 deg apart, as it lies turned one way or the
+// other (docs/measurements.md).
 struct SlideSettings {
   double tilt_rate_deg_per_s = 5.0;
   double max_angle_deg = 80.0;
+  int ensemble_runs = 1;
+  double placement_tolerance_deg = 5.0;
 };
 
 // Slide test (thesis 3.4.1): a flexible fillet of the trial's `variant` (default 172x72x32) and
 // `mirrored` flag on a plate tilted at the trial's `tilt_rate` until it slides; the onset angle is
-// the answer, the same on every row (the rows are repetitions, the twin is deterministic). The
+// the answer, the same on every row (the rows are repetitions, the twin is deterministic; an
+// ensemble, SlideSettings, answers its mean and spread). The
 // fillet-equipment laws are the spec's: coulomb friction and jkr adhesion keep the spec's values
 // (run_slide's own defaults are not used), and effects in that chain act. The `surface` condition:
 // the spec describes the dry plate; a wet_film law in it is the film a wet plate carries, so it
@@ -168,9 +181,10 @@ class TwinLineTracksModel final : public TrialModel {
 // ensemble cannot jitter the first poses by it. Empty when all three have one.
 std::string_view line_tracks_channel_without_noise(const Dataset& dataset);
 
-// What make_twin_model's twins take besides the engine model: none but line tracks so far.
+// What make_twin_model's twins take besides the engine model.
 struct TwinSettings {
   LineTracksSettings line_tracks;
+  SlideSettings slide;
 };
 
 // The twin of an experiment type (every type of the measurement format): what compare, diagnose
