@@ -271,9 +271,12 @@ std::string diagnosis_verdict(const Diagnosis& diagnosis, const DiagnoseOptions&
   }
   const double first_pose_spread =
       std::max(diagnosis.base_first_pose_spread, diagnosis.best_first_pose_spread);
-  if (first_pose_spread > 2.0 * diagnosis.noise_si && diagnosis.noise_si > 0.0) {
-    verdict << ". But the tracks hang on stick or slip: first poses moved within the noise move "
-               "them by "
+  if (first_pose_spread > diagnosis.first_pose_spread_allowed && diagnosis.noise_si > 0.0) {
+    verdict << (diagnosis.experiment == ExperimentType::kSlide
+                    ? ". But the onset turns on how the fillet lies: placements turned within "
+                      "the tolerance move it by "
+                    : ". But the tracks hang on stick or slip: first poses moved within the "
+                      "noise move them by ")
             << first_pose_spread << " RMS (" << first_pose_spread / diagnosis.noise_si
             << " noise sigmas), so one run a trial fits chance; diagnose again with --ensemble 8";
   }
@@ -288,6 +291,7 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   }
   Diagnosis diagnosis;
   diagnosis.channel = std::string(channel);
+  diagnosis.experiment = dataset.experiment;
   const auto noise = dataset.noise_si.find(channel);
   diagnosis.noise_si = noise == dataset.noise_si.end() ? 0.0 : noise->second;
   std::vector<std::size_t> all_trials(dataset.trials.size());
@@ -343,14 +347,19 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
 
   rank_candidates(diagnosis, std::move(results), options);
 
-  // Line tracks from one run a trial: would the tracks move if the first poses moved within
-  // the noise? A probe ensemble of the base model and of the best fit says.
-  const bool probe_first_poses = dataset.experiment == ExperimentType::kLineTracks &&
-                                 options.twin.line_tracks.ensemble_runs == 1 &&
-                                 line_tracks_channel_without_noise(dataset).empty();
-  if (probe_first_poses) {
+  // Line tracks or slide from one run a trial: would the answers move if the fillet started
+  // elsewhere within what the measurement leaves open? A probe ensemble of the base model and
+  // of the best fit says.
+  const bool probe_tracks = dataset.experiment == ExperimentType::kLineTracks &&
+                            options.twin.line_tracks.ensemble_runs == 1 &&
+                            line_tracks_channel_without_noise(dataset).empty();
+  const bool probe_slide =
+      dataset.experiment == ExperimentType::kSlide && options.twin.slide.ensemble_runs == 1;
+  if (probe_tracks || probe_slide) {
+    diagnosis.first_pose_spread_allowed = (probe_slide ? 1.0 : 2.0) * diagnosis.noise_si;
     TwinSettings probe = options.twin;
     probe.line_tracks.ensemble_runs = kFirstPoseProbeRuns;
+    probe.slide.ensemble_runs = kFirstPoseProbeRuns;
     const auto spread_of = [&](const model_tests::CommonParams& model) {
       const Residuals r = residuals(dataset, model, all_trials, probe);
       return std::sqrt(r.spread_ss / static_cast<double>(r.samples));
@@ -364,8 +373,8 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
       diagnosis.best_first_pose_spread = spread_of(fitted);
     }
     spdlog::info(
-        "diagnose: first poses within the noise move the tracks by {:.3g} (base) and "
-        "{:.3g} (best fit), RMS",
+        "diagnose: starts within what the data leaves open move the answers by {:.3g} (base) "
+        "and {:.3g} (best fit), RMS",
         diagnosis.base_first_pose_spread, diagnosis.best_first_pose_spread);
   }
 
@@ -393,6 +402,7 @@ std::string diagnosis_json(const Diagnosis& diagnosis) {
                       {"base_model_spread_si", diagnosis.base_model_spread},
                       {"base_first_pose_spread_si", diagnosis.base_first_pose_spread},
                       {"best_first_pose_spread_si", diagnosis.best_first_pose_spread},
+                      {"first_pose_spread_allowed_si", diagnosis.first_pose_spread_allowed},
                       {"indistinct_from", diagnosis.indistinct_from},
                       {"indistinct_bic_gap", diagnosis.indistinct_bic_gap},
                       {"verdict", diagnosis.verdict}};

@@ -96,13 +96,17 @@ inline double bend_score(const Dataset& data, const HiddenEffect& effect) {
 // Issue 6's proof on a dataset made with a hidden effect: diagnose ranks that effect first and
 // proposes it, and adding it as fitted makes the error fall by 70 % or more and end within
 // twice the noise. `score(data, effect)`: the overall score (RMS over noise) of the channel.
+// Returns the diagnosis, for what a test checks beyond the proof.
 template <typename Score>
-void expect_hidden_effect_found(const GeneratedDataset& made, std::string_view channel,
-                                const Score& score) {
+Diagnosis expect_hidden_effect_found(const GeneratedDataset& made, std::string_view channel,
+                                     const Score& score) {
   SCOPED_TRACE(made.truth.law);
   const Dataset& data = made.dataset;
   const Diagnosis diagnosis = diagnose(data, base_model(), candidates_for(data.experiment));
-  ASSERT_FALSE(diagnosis.ranked.empty());
+  if (diagnosis.ranked.empty()) {
+    ADD_FAILURE() << "no candidate ranked: " << diagnosis.verdict;
+    return diagnosis;
+  }
   EXPECT_EQ(diagnosis.channel, channel);
   EXPECT_EQ(diagnosis.ranked.front().law, made.truth.law) << diagnosis.verdict;
   EXPECT_TRUE(diagnosis.ranked.front().proposed) << diagnosis.verdict;
@@ -110,14 +114,17 @@ void expect_hidden_effect_found(const GeneratedDataset& made, std::string_view c
   const double after = score(data, proposed_effect(diagnosis));
   EXPECT_LE(after, 0.3 * before) << "before " << before << ", after " << after;
   EXPECT_LE(after, 2.0) << "in noise sigmas";
+  return diagnosis;
 }
 
-// The other half of the proof: residuals at the noise level get no effect proposed.
-inline void expect_nothing_proposed(const Dataset& data) {
+// The other half of the proof: residuals at the noise level get no effect proposed. Returns
+// the diagnosis.
+inline Diagnosis expect_nothing_proposed(const Dataset& data) {
   const Diagnosis diagnosis = diagnose(data, base_model(), candidates_for(data.experiment));
   for (const CandidateResult& result : diagnosis.ranked) EXPECT_FALSE(result.proposed);
   EXPECT_TRUE(proposed_effect(diagnosis).law.empty());
   EXPECT_NE(diagnosis.verdict.find("nothing missing"), std::string::npos) << diagnosis.verdict;
+  return diagnosis;
 }
 
 }  // namespace fl::workbench::test

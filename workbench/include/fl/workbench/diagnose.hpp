@@ -62,12 +62,21 @@ struct Diagnosis {
   double base_held_out_rmse = 0.0;
   double noise_si = 0.0;
   double base_model_spread = 0.0;  // the base ensemble's own spread, RMS (one run: 0)
-  // Line tracks diagnosed from one run a trial: how far the tracks of the base model and of
-  // the best-ranked fit move, RMS, when the first poses move within the noise (a probe of
-  // kFirstPoseProbeRuns runs each). Beyond twice the noise the tracks hang on stick or slip,
-  // and the verdict says to use an ensemble. 0 when not probed.
+  // Line tracks or slide diagnosed from one run a trial: how far the answers of the base model
+  // and of the best-ranked fit move, RMS, when the fillet starts elsewhere within what the
+  // measurement leaves open (line tracks: the first poses within the noise; slide: the
+  // placement within SlideSettings' tolerance), from a probe of kFirstPoseProbeRuns runs each.
+  // Beyond first_pose_spread_allowed the answer hangs on stick or slip, and the verdict says to
+  // use an ensemble. 0 when not probed.
   double base_first_pose_spread = 0.0;
   double best_first_pose_spread = 0.0;
+  // Line tracks: twice the noise (each row is judged on its own). Slide: the noise (the rows
+  // repeat one answer, so a trial's offset is what the fit sees, and one noise sigma is three
+  // standard errors of a ten-repetition mean; the coulomb 172 mm fillet's two ways of starting
+  // to slide, 0.19 deg RMS over four placements, stay under 0.3 deg, a static friction's
+  // 0.44 deg does not).
+  double first_pose_spread_allowed = 0.0;
+  ExperimentType experiment = ExperimentType::kCompress;
   std::string held_out_trial;
   std::vector<CandidateResult> ranked;  // best (lowest BIC) first
   // When the best is proposed and the runner-up would pass as well with a BIC less than
@@ -79,7 +88,7 @@ struct Diagnosis {
   std::string verdict;
 };
 
-// Runs of the first-pose probe of a line-track diagnosis from one run a trial (Diagnosis).
+// Runs of the first-pose probe of a line-track or slide diagnosis from one run a trial.
 inline constexpr int kFirstPoseProbeRuns = 4;
 
 struct DiagnoseOptions {
