@@ -30,7 +30,9 @@ struct CompareArgs {
   std::string dem_config;  // default: config/dem.yaml
   double radius_mm = 7.0;  // sub-particle radius of the twin's samples
   int threads = 1;
-  int ensemble = 1;  // line tracks: twin runs per trial from first poses within the noise
+  // Twin runs per trial: line tracks from first poses within the noise, slide from
+  // placements within the tolerance.
+  int ensemble = 1;
 };
 
 struct GenerateArgs {

@@ -353,8 +353,8 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   const bool probe_tracks = dataset.experiment == ExperimentType::kLineTracks &&
                             options.twin.line_tracks.ensemble_runs == 1 &&
                             line_tracks_channel_without_noise(dataset).empty();
-  const bool probe_slide =
-      dataset.experiment == ExperimentType::kSlide && options.twin.slide.ensemble_runs == 1;
+  const bool probe_slide = dataset.experiment == ExperimentType::kSlide &&
+                           options.twin.slide.ensemble_runs == 1 && diagnosis.noise_si > 0.0;
   if (probe_tracks || probe_slide) {
     diagnosis.first_pose_spread_allowed = (probe_slide ? 1.0 : 2.0) * diagnosis.noise_si;
     TwinSettings probe = options.twin;
@@ -364,13 +364,24 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
       const Residuals r = residuals(dataset, model, all_trials, probe);
       return std::sqrt(r.spread_ss / static_cast<double>(r.samples));
     };
-    diagnosis.base_first_pose_spread = spread_of(base);
-    if (!diagnosis.ranked.empty()) {
-      const CandidateResult& best = diagnosis.ranked.front();
-      HiddenEffect effect{best.law, best.fitted};
-      model_tests::CommonParams fitted = base;
-      fitted.base_spec = with_experiment_effect(base.base_spec, dataset.experiment, effect);
-      diagnosis.best_first_pose_spread = spread_of(fitted);
+    // The probe only advises: a start it cannot run (a turned fillet that never slides, a
+    // jittered track that goes unstable) costs the advice, never the diagnosis.
+    try {
+      diagnosis.base_first_pose_spread = spread_of(base);
+      if (!diagnosis.ranked.empty()) {
+        const CandidateResult& best = diagnosis.ranked.front();
+        HiddenEffect effect{best.law, best.fitted};
+        model_tests::CommonParams fitted = base;
+        fitted.base_spec = with_experiment_effect(base.base_spec, dataset.experiment, effect);
+        diagnosis.best_first_pose_spread = spread_of(fitted);
+      }
+    } catch (const std::exception& error) {
+      diagnosis.base_first_pose_spread = 0.0;
+      diagnosis.best_first_pose_spread = 0.0;
+      spdlog::warn(
+          "diagnose: the probe of other starts could not run ({}); no advice on an "
+          "ensemble",
+          error.what());
     }
     spdlog::info(
         "diagnose: starts within what the data leaves open move the answers by {:.3g} (base) "

@@ -164,9 +164,13 @@ TwinSlideModel::TwinSlideModel(model_tests::CommonParams common, SlideSettings s
     throw std::invalid_argument("the slide ensemble needs one run or more, not " +
                                 std::to_string(settings_.ensemble_runs));
   }
-  if (!(settings_.placement_tolerance_deg >= 0.0 && settings_.placement_tolerance_deg <= 45.0)) {
+  // Beyond 45 deg the fillet would lie across the tilt: another test, not a placement error.
+  // An ensemble at 0 would slide the same run N times and call its spread 0.
+  const bool runs_vary = settings_.ensemble_runs == 1 || settings_.placement_tolerance_deg > 0.0;
+  if (!(settings_.placement_tolerance_deg >= 0.0 && settings_.placement_tolerance_deg <= 45.0) ||
+      !runs_vary) {
     throw std::invalid_argument(
-        "the slide ensemble's placement tolerance must be 0 to 45 deg, not " +
+        "the slide ensemble's placement tolerance must be above 0 and at most 45 deg, not " +
         std::to_string(settings_.placement_tolerance_deg));
   }
 }

@@ -71,10 +71,11 @@ struct Diagnosis {
   double base_first_pose_spread = 0.0;
   double best_first_pose_spread = 0.0;
   // Line tracks: twice the noise (each row is judged on its own). Slide: the noise (the rows
-  // repeat one answer, so a trial's offset is what the fit sees, and one noise sigma is three
-  // standard errors of a ten-repetition mean; the coulomb 172 mm fillet's two ways of starting
-  // to slide, 0.19 deg RMS over four placements, stay under 0.3 deg, a static friction's
-  // 0.44 deg does not).
+  // repeat one answer, so a trial's offset is what the fit sees, and one noise sigma is
+  // sqrt(n) standard errors of an n-repetition mean, three for the usual ten). On the
+  // generator's data the coulomb base reads 0.19 deg RMS (the 172 mm fillet's two ways of
+  // starting to slide; a dataset of that fillet alone would read about 0.28, close under the
+  // line) and a fitted static friction 0.44 deg, against 0.3 deg of noise.
   double first_pose_spread_allowed = 0.0;
   ExperimentType experiment = ExperimentType::kCompress;
   std::string held_out_trial;
@@ -98,8 +99,9 @@ struct DiagnoseOptions {
   // the held-out error falls by more than min_held_out_gain.
   double min_bic_drop = 10.0;
   double min_held_out_gain = 0.2;
-  // How the twins run: line tracks may run an ensemble per trial (LineTracksSettings), whose
-  // mean is fitted: one run's track can hang on a stick or slip that the noise decides.
+  // How the twins run: line tracks and slides may run an ensemble per trial
+  // (LineTracksSettings, SlideSettings), whose mean is fitted: one run's answer can hang on a
+  // stick or slip that the noise or the placement decides.
   TwinSettings twin;
 };
 

@@ -115,9 +115,10 @@ struct SlideParams {
   double max_angle_deg = 70.0;
   double settle_s = 0.3;           // flat plate before tilting
   double slide_distance_m = 0.01;  // centroid travel along the plate that counts as sliding
-  // The fillet's turn about the vertical as it is laid on the plate (0: its long axis along the
-  // tilt). A hand placement varies it by a few degrees; where the contacts stick and slip, the
-  // onset turns on it (an ensemble over it: workbench::SlideSettings).
+  // The fillet's turn about the vertical (+z, counter-clockwise seen from above) as it is laid
+  // on the plate (0: its long axis along the tilt). A hand placement varies it by a few degrees;
+  // where the contacts stick and slip, the onset turns on it (an ensemble over it:
+  // workbench::SlideSettings).
   double placement_yaw_rad = 0.0;
   // Fillet-equipment friction (appendix B: 0.5): coulomb's mu or, where the chain has
   // static_kinetic_friction instead, its static mu_s (the onset: atan(mu_s) on an incline) with
