@@ -102,7 +102,7 @@ Diagnosis expect_hidden_effect_found(const GeneratedDataset& made, std::string_v
                                      const Score& score) {
   SCOPED_TRACE(made.truth.law);
   const Dataset& data = made.dataset;
-  const Diagnosis diagnosis = diagnose(data, base_model(), candidates_for(data.experiment));
+  Diagnosis diagnosis = diagnose(data, base_model(), candidates_for(data.experiment));
   if (diagnosis.ranked.empty()) {
     ADD_FAILURE() << "no candidate ranked: " << diagnosis.verdict;
     return diagnosis;
@@ -120,7 +120,7 @@ Diagnosis expect_hidden_effect_found(const GeneratedDataset& made, std::string_v
 // The other half of the proof: residuals at the noise level get no effect proposed. Returns
 // the diagnosis.
 inline Diagnosis expect_nothing_proposed(const Dataset& data) {
-  const Diagnosis diagnosis = diagnose(data, base_model(), candidates_for(data.experiment));
+  Diagnosis diagnosis = diagnose(data, base_model(), candidates_for(data.experiment));
   for (const CandidateResult& result : diagnosis.ranked) EXPECT_FALSE(result.proposed);
   EXPECT_TRUE(proposed_effect(diagnosis).law.empty());
   EXPECT_NE(diagnosis.verdict.find("nothing missing"), std::string::npos) << diagnosis.verdict;
