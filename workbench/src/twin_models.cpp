@@ -204,8 +204,9 @@ Table TwinSlideModel::run(const Dataset& dataset, const Trial& trial) {
   params.max_angle_deg = settings_.max_angle_deg;
   dem::ModelSpec& spec = params.common.base_spec;
   const std::uint32_t equipment = model_tests::equipment_type(spec);
-  // run_slide sets the fillet-equipment coulomb friction and jkr energy itself: hand it the
-  // spec's own, so the spec is the one source of the model.
+  // run_slide sets the fillet-equipment friction (coulomb's, or static_kinetic_friction's static
+  // coefficient) and jkr energy itself: hand it the spec's own, so the spec is the one source of
+  // the model.
   keep_wet_film_for_wet_trials(spec, trial.conditions);
   std::optional<double> friction, surface_energy;
   for (dem::InteractionSpec& interaction : spec.interactions) {
@@ -219,11 +220,8 @@ Table TwinSlideModel::run(const Dataset& dataset, const Trial& trial) {
     if (coulomb != laws.end()) {
       friction = coulomb->parameters.at("friction_coefficient");
     } else if (static_kinetic != laws.end()) {
-      // static_kinetic_friction replaced coulomb, but run_slide needs a coulomb to set: one at
-      // the static coefficient after it never binds (the force is already limited to that).
+      // static_kinetic_friction replaced coulomb: run_slide sets its static coefficient.
       friction = static_kinetic->parameters.at("static_friction_coefficient");
-      laws.insert(static_kinetic + 1,
-                  dem::LawSpec{"coulomb", {{"friction_coefficient", *friction}}});
     }
     for (const dem::LawSpec& law : laws) {
       if (law.name == "jkr") surface_energy = law.parameters.at("surface_energy_j_per_m2");

@@ -31,9 +31,11 @@ std::string refusal(const std::vector<LawSpec>& chain,
 }
 
 TEST(DemChainOrder, TheShippedAndTheWorkbenchChainsBuild) {
-  // config/dem.yaml's chain, and the longest the workbench makes (slide model: a coulomb at the
-  // static coefficient after static_kinetic_friction; wet film; rolling resistance last)
+  // config/dem.yaml's chain, and the longest the workbench makes (a wet film, static friction
+  // in coulomb's place, rolling resistance last), and one with a coulomb kept after the static
+  // friction (a user's config may do so; the two friction laws must still chain)
   EXPECT_EQ(refusal({test::hertz(1e-4), jkr(), test::coulomb(0.5)}), "");
+  EXPECT_EQ(refusal({test::hertz(1e-4), jkr(), wet_film(), static_kinetic(), rolling()}), "");
   EXPECT_EQ(refusal({test::hertz(1e-4), jkr(), wet_film(), static_kinetic(), test::coulomb(0.6),
                      rolling()}),
             "");
