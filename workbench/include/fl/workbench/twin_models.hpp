@@ -37,9 +37,9 @@ class TwinCompressModel final : public TrialModel {
 // adds to the noise. Why: one run a trial is one draw where the onset turns on how the fillet
 // lies. Where contacts stick and slip (static_kinetic_friction) it turns chaotically: by 0.5
 // deg RMS for +-4 deg of turn on the 144 mm fillet, and by 0.3 to 0.9 deg between stick
-// speeds 0.3 to 1 % apart. Under coulomb the 144 mm fillet's onset moves by under 0.05 deg, but the 172 mm
-// one starts to slide in one of two ways, 0.45 deg apart, as it lies turned one way or the
-// other (docs/measurements.md).
+// speeds 0.3 to 1 % apart. Under coulomb the 144 mm fillet's onset moves by under 0.05 deg,
+// but the 172 mm one starts to slide in one of two ways, 0.45 deg apart, as it lies turned
+// one way or the other (docs/measurements.md).
 struct SlideSettings {
   double tilt_rate_deg_per_s = 5.0;
   double max_angle_deg = 80.0;
