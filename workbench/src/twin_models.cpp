@@ -118,6 +118,15 @@ Table single_channel_answer(const Trial& trial, std::string_view name,
   return table;
 }
 
+// An ensemble's spread, 1 sigma of where one more member would land from the members' mean:
+// their sample standard deviation times sqrt(1 + 1/runs), from the sums of the members' values
+// and squares (a few runs of positions within metres lose nothing to this over Welford's).
+double ensemble_spread(double sum, double sum_sq, double runs) {
+  const double mean = sum / runs;
+  const double variance = std::max(0.0, (sum_sq - runs * mean * mean) / (runs - 1.0));
+  return std::sqrt(variance * (1.0 + 1.0 / runs));
+}
+
 }  // namespace
 
 TwinCompressModel::TwinCompressModel(model_tests::CommonParams common)
@@ -256,11 +265,9 @@ Table TwinSlideModel::run(const Dataset& dataset, const Trial& trial) {
   Table table =
       single_channel_answer(trial, "onset_angle", std::vector<double>(trial.data.rows(), mean_rad));
   if (runs > 1) {
-    // How far one more placement would land from the mean, 1 sigma (as the line tracks').
-    const double variance = std::max(0.0, (sum_sq_rad - n * mean_rad * mean_rad) / (n - 1.0));
     table.channels.push_back(
         {"onset_angle_spread", trial.data.at("onset_angle").unit,
-         std::vector<double>(trial.data.rows(), std::sqrt(variance * (1.0 + 1.0 / n)))});
+         std::vector<double>(trial.data.rows(), ensemble_spread(sum_rad, sum_sq_rad, n))});
   }
   return table;
 }
@@ -499,8 +506,7 @@ Table TwinLineTracksModel::run(const Dataset& dataset, const Trial& trial) {
   }
   std::mt19937_64 random(trial_seed(settings_.seed, trial.id));
   std::normal_distribution<double> standard_normal(0.0, 1.0);
-  // Sums over the members of each channel's value and square, per row (Welford would be
-  // steadier, but a few runs of positions within metres lose nothing to this).
+  // Sums over the members of each channel's value and square, per row (ensemble_spread).
   std::array<std::vector<double>, 3> sum, sum_sq;
   for (auto& s : sum) s.assign(order.size(), 0.0);
   for (auto& s : sum_sq) s.assign(order.size(), 0.0);
@@ -547,9 +553,7 @@ Table TwinLineTracksModel::run(const Dataset& dataset, const Trial& trial) {
     for (std::size_t c = 0; c < 3; ++c) {
       std::vector<double> spread(order.size());
       for (std::size_t row = 0; row < order.size(); ++row) {
-        const double mean = sum[c][row] / n;
-        const double variance = std::max(0.0, (sum_sq[c][row] - n * mean * mean) / (n - 1.0));
-        spread[row] = std::sqrt(variance * (1.0 + 1.0 / n));
+        spread[row] = ensemble_spread(sum[c][row], sum_sq[c][row], n);
       }
       table.channels.push_back(
           {std::string(kChannels[c]) + "_spread", trial.data.at(kChannels[c]).unit, spread});
