@@ -20,12 +20,18 @@ namespace fl::workbench {
 namespace {
 
 using detail::judged_channel;
+using detail::RepetitionScoring;
 using detail::Residuals;
 using detail::residuals;
 
-double bic(double rss, std::size_t samples, std::size_t parameters) {
-  const auto n = static_cast<double>(samples);
-  return n * std::log(std::max(rss, 1e-300) / n) + static_cast<double>(parameters) * std::log(n);
+// -2 ln L + k ln n: from the residual sum (the noise taken as its maximum-likelihood estimate)
+// for one run a trial, from the repetition deviance for an ensemble on repeated rows.
+double bic(const Residuals& r, const std::optional<RepetitionScoring>& scoring,
+           std::size_t parameters) {
+  const auto n = static_cast<double>(r.samples);
+  const double penalty = static_cast<double>(parameters) * std::log(n);
+  if (scoring) return detail::repetition_deviance(r.trials, *scoring) + penalty;
+  return n * std::log(std::max(r.rss, 1e-300) / n) + penalty;
 }
 
 double from_unit(const ParameterBound& bound, double u) {
@@ -39,8 +45,8 @@ struct FitContext {
   const EffectCandidate* candidate = nullptr;
   const std::vector<std::size_t>* trials = nullptr;
   const TwinSettings* twin = nullptr;
+  const std::optional<RepetitionScoring>* scoring = nullptr;
   int evaluations = 0;
-  double best_rss = std::numeric_limits<double>::infinity();
 };
 
 model_tests::CommonParams with_effect(const model_tests::CommonParams& base,
@@ -57,47 +63,47 @@ model_tests::CommonParams with_effect(const model_tests::CommonParams& base,
   return common;
 }
 
-// The fit trials' RSS with the candidate's parameters at a point of the unit box, counted.
+// What the fit minimises over the fit trials with the candidate's parameters at a point of the
+// unit box, counted: the RSS, or the repetition deviance where that judges.
 double objective(FitContext& context, const std::vector<double>& x) {
   ++context.evaluations;
-  const double rss = residuals(*context.dataset,
-                               with_effect(*context.base, *context.candidate,
-                                           context.dataset->experiment, x.data()),
-                               *context.trials, *context.twin)
-                         .rss;
-  context.best_rss = std::min(context.best_rss, rss);
-  return rss;
+  const Residuals r = residuals(
+      *context.dataset,
+      with_effect(*context.base, *context.candidate, context.dataset->experiment, x.data()),
+      *context.trials, *context.twin);
+  return *context.scoring ? detail::repetition_deviance(r.trials, **context.scoring) : r.rss;
 }
 
 CandidateResult fit(const Dataset& dataset, const model_tests::CommonParams& base,
                     const EffectCandidate& candidate, const std::vector<std::size_t>& fit_trials,
                     const std::vector<std::size_t>& all_trials, std::size_t held_out,
-                    const DiagnoseOptions& options) {
+                    const DiagnoseOptions& options,
+                    const std::optional<RepetitionScoring>& scoring) {
   const auto dimensions = static_cast<unsigned>(candidate.parameters.size());
-  FitContext context{&dataset, &base, &candidate, &fit_trials, &options.twin};
+  FitContext context{&dataset, &base, &candidate, &fit_trials, &options.twin, &scoring};
   // Start from the best of the middle and the points a quarter in from the corners of the
   // (log) box: an effect can be flat over much of its range (a stick speed below the contacts'
   // creep hides any static friction), and a local search started on such a plateau stops
   // there. 2^d + 1 twin runs over the fit trials.
-  const detail::UnitBoxObjective fit_rss = [&](const std::vector<double>& point) {
+  const detail::UnitBoxObjective fit_objective = [&](const std::vector<double>& point) {
     return objective(context, point);
   };
   const std::string who = "diagnose: " + candidate.law;
   const auto guarded = [&](const std::vector<double>& point) {
-    return detail::guarded_value(fit_rss, point, who);
+    return detail::guarded_value(fit_objective, point, who);
   };
   std::vector<double> x(dimensions, 0.5);
-  double start_rss = guarded(x);
+  double start_value = guarded(x);
   for (unsigned corner = 0; corner < (1U << dimensions); ++corner) {
     std::vector<double> point(dimensions);
     for (unsigned p = 0; p < dimensions; ++p) point[p] = (corner >> p) & 1U ? 0.75 : 0.25;
-    const double rss = guarded(point);
-    if (rss < start_rss) {
-      start_rss = rss;
+    const double value = guarded(point);
+    if (value < start_value) {
+      start_value = value;
       x = point;
     }
   }
-  detail::minimise_in_unit_box(fit_rss, x, start_rss, 0.25, options.max_evaluations, who);
+  detail::minimise_in_unit_box(fit_objective, x, start_value, 0.25, options.max_evaluations, who);
   CandidateResult result;
   result.law = candidate.law;
   result.evaluations = context.evaluations;
@@ -109,7 +115,7 @@ CandidateResult fit(const Dataset& dataset, const model_tests::CommonParams& bas
   const Residuals all = residuals(dataset, fitted, all_trials, options.twin);
   result.rss = all.rss;
   result.model_spread = std::sqrt(all.spread_ss / static_cast<double>(all.samples));
-  result.bic = bic(all.rss, all.samples, dimensions);
+  result.bic = bic(all, scoring, dimensions);
   const Residuals out = residuals(dataset, fitted, {held_out}, options.twin);
   result.held_out_rmse = std::sqrt(out.rss / static_cast<double>(out.samples));
   return result;
@@ -294,6 +300,9 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   diagnosis.experiment = dataset.experiment;
   const auto noise = dataset.noise_si.find(channel);
   diagnosis.noise_si = noise == dataset.noise_si.end() ? 0.0 : noise->second;
+  const std::optional<RepetitionScoring> scoring =
+      detail::repetition_scoring(dataset, options.twin);
+  diagnosis.score = scoring ? "repetition_likelihood" : "residual_sum";
   std::vector<std::size_t> all_trials(dataset.trials.size());
   std::vector<double> base_trial_rmse(dataset.trials.size());
   Residuals base_all;
@@ -304,6 +313,7 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
     base_all.rss += trial.rss;
     base_all.samples += trial.samples;
     base_all.spread_ss += trial.spread_ss;
+    base_all.trials.insert(base_all.trials.end(), trial.trials.begin(), trial.trials.end());
   }
   const std::size_t held_out = held_out_trial(dataset, base_trial_rmse);
   diagnosis.held_out_trial = dataset.trials[held_out].id;
@@ -313,12 +323,12 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   }
   diagnosis.samples = base_all.samples;
   diagnosis.base_rmse = std::sqrt(base_all.rss / static_cast<double>(base_all.samples));
-  diagnosis.base_bic = bic(base_all.rss, base_all.samples, 0);
+  diagnosis.base_bic = bic(base_all, scoring, 0);
   diagnosis.base_held_out_rmse = base_trial_rmse[held_out];
   diagnosis.base_model_spread =
       std::sqrt(base_all.spread_ss / static_cast<double>(base_all.samples));
-  spdlog::info("diagnose: base model RMS {:.4g} (SI) over {} samples, held out '{}'",
-               diagnosis.base_rmse, diagnosis.samples, diagnosis.held_out_trial);
+  spdlog::info("diagnose: base model RMS {:.4g} (SI) over {} samples, held out '{}', judged by {}",
+               diagnosis.base_rmse, diagnosis.samples, diagnosis.held_out_trial, diagnosis.score);
 
   // Candidates in parallel: each fit runs its own twins, nothing shared but the inputs.
   std::vector<CandidateResult> results(candidates.size());
@@ -333,7 +343,7 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
         index = next++;
       }
       results[index] =
-          fit(dataset, base, candidates[index], fit_trials, all_trials, held_out, options);
+          fit(dataset, base, candidates[index], fit_trials, all_trials, held_out, options, scoring);
       spdlog::info("diagnose: {} fitted in {} twin evaluations", candidates[index].law,
                    results[index].evaluations);
     }
@@ -404,6 +414,7 @@ HiddenEffect proposed_effect(const Diagnosis& diagnosis) {
 
 std::string diagnosis_json(const Diagnosis& diagnosis) {
   nlohmann::json json{{"channel", diagnosis.channel},
+                      {"score", diagnosis.score},
                       {"samples", diagnosis.samples},
                       {"noise_si", diagnosis.noise_si},
                       {"base_rmse_si", diagnosis.base_rmse},

@@ -3,7 +3,9 @@
 #include <nlopt.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -28,16 +30,89 @@ Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& com
     const Table predicted = model->run(dataset, trial);
     const std::vector<double>& measured = trial.data.at(channel).values_si;
     const std::vector<double>& modelled = predicted.at(channel).values_si;
+    TrialRepetitions repetitions;
+    repetitions.rows = measured.size();
+    double spread_ss = 0.0;
     for (std::size_t k = 0; k < measured.size(); ++k) {
       const double e = modelled[k] - measured[k];
       r.rss += e * e;
+      repetitions.measured_mean += measured[k];
+      repetitions.model_mean += modelled[k];
     }
     if (const Channel* spread = predicted.find(spread_channel); spread != nullptr) {
-      for (const double s : spread->values_si) r.spread_ss += s * s;
+      for (const double s : spread->values_si) spread_ss += s * s;
     }
+    r.spread_ss += spread_ss;
     r.samples += measured.size();
+    if (!measured.empty()) {
+      const auto rows = static_cast<double>(measured.size());
+      repetitions.measured_mean /= rows;
+      repetitions.model_mean /= rows;
+      repetitions.model_spread = std::sqrt(spread_ss / rows);
+      for (const double y : measured) {
+        repetitions.within_ss += (y - repetitions.measured_mean) * (y - repetitions.measured_mean);
+      }
+    }
+    r.trials.push_back(repetitions);
   }
   return r;
+}
+
+bool rows_repeat_one_answer(ExperimentType type) { return type == ExperimentType::kSlide; }
+
+std::optional<RepetitionScoring> repetition_scoring(const Dataset& dataset,
+                                                    const TwinSettings& settings) {
+  if (!rows_repeat_one_answer(dataset.experiment) || settings.slide.ensemble_runs < 2) {
+    return std::nullopt;
+  }
+  const std::string_view channel = judged_channel(dataset.experiment);
+  RepetitionScoring scoring;
+  scoring.ensemble_runs = settings.slide.ensemble_runs;
+  if (const auto noise = dataset.noise_si.find(channel); noise != dataset.noise_si.end()) {
+    scoring.stated_noise_variance = noise->second * noise->second;
+  }
+  double within_ss = 0.0;
+  std::size_t degrees_of_freedom = 0;
+  for (const Trial& trial : dataset.trials) {
+    const std::vector<double>& rows = trial.data.at(channel).values_si;
+    if (rows.size() < 2) continue;
+    double mean = 0.0;
+    for (const double y : rows) mean += y;
+    mean /= static_cast<double>(rows.size());
+    for (const double y : rows) within_ss += (y - mean) * (y - mean);
+    degrees_of_freedom += rows.size() - 1;
+  }
+  // Two degrees of freedom at least: one difference of two rows says too little of a scatter.
+  if (degrees_of_freedom >= 2 && within_ss > 0.0) {
+    scoring.within_variance = within_ss / static_cast<double>(degrees_of_freedom);
+  } else {
+    scoring.within_variance = scoring.stated_noise_variance;
+  }
+  if (scoring.within_variance <= 0.0) return std::nullopt;
+  return scoring;
+}
+
+double repetition_deviance(const std::vector<TrialRepetitions>& trials,
+                           const RepetitionScoring& scoring) {
+  constexpr double kTwoPi = 6.283185307179586;
+  const double w = scoring.within_variance;
+  // The part of the rows' scatter beyond the stated noise: placement scatter they already show.
+  const double shown = scoring.stated_noise_variance > 0.0
+                           ? std::max(0.0, w - scoring.stated_noise_variance)
+                           : std::numeric_limits<double>::infinity();
+  double deviance = 0.0;
+  for (const TrialRepetitions& trial : trials) {
+    if (trial.rows == 0) continue;
+    const auto n = static_cast<double>(trial.rows);
+    const double spread_sq = trial.model_spread * trial.model_spread;
+    const double shared =
+        spread_sq / (scoring.ensemble_runs + 1.0) + std::max(0.0, spread_sq - shown);
+    const double v = w / n + shared;
+    const double offset = trial.measured_mean - trial.model_mean;
+    deviance += n * std::log(kTwoPi) + (n - 1.0) * std::log(w) + std::log(n) + std::log(v) +
+                trial.within_ss / w + offset * offset / v;
+  }
+  return deviance;
 }
 
 double guarded_value(const UnitBoxObjective& objective, const std::vector<double>& point,
@@ -97,7 +172,8 @@ double minimise_in_unit_box(const UnitBoxObjective& objective, std::vector<doubl
     if (status < 0) {
       spdlog::warn("{}: the local search stopped with status {}", who, static_cast<int>(status));
     }
-    const bool gained = found_value < 0.99 * best;
+    // 1 % of the magnitude: a deviance can be negative.
+    const bool gained = found_value < best - 0.01 * std::abs(best);
     if (found_value < best) {
       best = found_value;
       x = found;

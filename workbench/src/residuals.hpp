@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <string_view>
 #include <vector>
 
@@ -18,17 +19,62 @@ namespace fl::workbench::detail {
 // type the twin does not reproduce.
 std::string_view judged_channel(ExperimentType type);
 
+// One trial's rows read as repetitions of one answer (a slide's onset angle): what the
+// repetition deviance needs of it.
+struct TrialRepetitions {
+  std::size_t rows = 0;
+  double measured_mean = 0.0;
+  double within_ss = 0.0;  // the measured rows' squared scatter about their mean
+  double model_mean = 0.0;
+  double model_spread = 0.0;  // an ensemble twin's spread (0 for one run)
+};
+
 struct Residuals {
   double rss = 0.0;
   std::size_t samples = 0;
   // Sum of the squared spread of an ensemble twin over the same rows (0 for one run).
   double spread_ss = 0.0;
+  std::vector<TrialRepetitions> trials;  // one a trial, in the order asked for
 };
 
 // Sum of squared residuals of the judged channel over the chosen trials, the twin built from
 // `common` and `settings`. Throws what the twin throws for a trial it cannot run.
 Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& common,
                     const std::vector<std::size_t>& trials, const TwinSettings& settings = {});
+
+// How an ensemble twin is judged on an experiment whose rows repeat one answer a trial
+// (rows_repeat_one_answer). One run a trial is judged by its residual sum; an ensemble by the
+// likelihood of the rows, so that a model whose answer scatters with the fillet's placement
+// pays for that scatter and is not judged by where one draw of it fell.
+struct RepetitionScoring {
+  // The rows' scatter about their trial's mean, pooled over the trials (SI^2): the noise, and
+  // the placement scatter too where each repetition re-laid the fillet.
+  double within_variance = 0.0;
+  // The manifest's noise squared (0 when not stated).
+  double stated_noise_variance = 0.0;
+  int ensemble_runs = 1;
+};
+
+// Whether the judged channel's rows within a trial repeat one answer (slide: the onset angle).
+bool rows_repeat_one_answer(ExperimentType type);
+
+// The scoring of an ensemble on `dataset`: set for an experiment whose rows repeat one answer,
+// run as an ensemble (settings), whose rows scatter (pooled over trials with 2 degrees of
+// freedom or more) or whose noise is stated; empty otherwise (the residual sum judges).
+std::optional<RepetitionScoring> repetition_scoring(const Dataset& dataset,
+                                                    const TwinSettings& settings);
+
+// -2 ln of the likelihood of the trials' rows. A trial's n rows are its answer plus an offset
+// shared by all of them plus a scatter of their own:
+//   y_i = m + d + e_i,  e_i ~ N(0, within_variance),  d ~ N(0, shared variance),
+// the shared variance being the ensemble mean's own error (spread^2 / (runs + 1)) and the
+// placement scatter (spread^2) the rows do not already show: all of it when their scatter is
+// the stated noise (the fillet lay once), none when it is the noise and the spread together
+// (re-laid every time), none without a stated noise. Exact for the multivariate normal:
+//   n ln 2pi + (n - 1) ln w + ln n + ln V + W / w + (mean - m)^2 / V,  V = w / n + shared,
+// with w the within variance and W the rows' squared scatter about their mean.
+double repetition_deviance(const std::vector<TrialRepetitions>& trials,
+                           const RepetitionScoring& scoring);
 
 using UnitBoxObjective = std::function<double(const std::vector<double>&)>;
 

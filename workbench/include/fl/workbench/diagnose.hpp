@@ -45,7 +45,7 @@ struct CandidateResult {
   std::string law;
   dem::LawParameters fitted;   // the effect's own parameters
   double rss = 0.0;            // sum of squared residuals over all trials, SI^2
-  double bic = 0.0;            // n ln(rss / n) + k ln n
+  double bic = 0.0;            // -2 ln L + k ln n (Diagnosis::score says which likelihood)
   double delta_bic = 0.0;      // against the base model (< 0: better)
   double held_out_rmse = 0.0;  // on the trial left out of the fit
   double improvement = 0.0;    // 1 - rmse / base rmse, all trials
@@ -56,6 +56,11 @@ struct CandidateResult {
 
 struct Diagnosis {
   std::string channel;  // the channel judged ("force")
+  // The likelihood behind every BIC: "residual_sum" (Gaussian rows, the noise estimated from
+  // the residuals: n ln(rss / n)), or "repetition_likelihood" for an ensemble on an experiment
+  // whose rows repeat one answer a trial (detail::repetition_deviance: a trial's mean offset
+  // is judged against the rows' scatter and the ensemble's own spread).
+  std::string score;
   std::size_t samples = 0;
   double base_rmse = 0.0;
   double base_bic = 0.0;
