@@ -151,6 +151,9 @@ CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args) {
                    "slide: tilt rates in deg/s, each trial repeated at each (e.g. 5,20)")
       ->delimiter(',')
       ->check(CLI::Range(0.1, 90.0));
+  generate->add_flag("--relaid", args.slide_relaid,
+                     "slide: re-lay the fillet for each repetition, turned at random within the "
+                     "placement tolerance (default: laid once, straight)");
   generate->add_option("--fillets", args.fillets_per_trial, "line_tracks: fillets per trial")
       ->check(CLI::Range(1, 100));
   generate
@@ -180,6 +183,7 @@ int generate_command(const GenerateArgs& args) {
   options.truth_starts_at_true_pose = args.truth_starts_at_true_pose;
   options.trials = args.trials;
   options.slide_tilt_rates_deg_per_s = args.slide_tilt_rates_deg_per_s;
+  options.slide_relaid = args.slide_relaid;
   options.common.base_spec = dem::load_model_spec(default_config("dem.yaml"));
   const GeneratedDataset made = generate_dataset(options);
   write_dataset(made.dataset, args.out);

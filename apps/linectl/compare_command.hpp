@@ -51,6 +51,7 @@ struct GenerateArgs {
   bool truth_starts_at_true_pose = false;
   int trials = 0;  // 0: the experiment's default
   std::vector<double> slide_tilt_rates_deg_per_s;
+  bool slide_relaid = false;
 };
 
 struct CalibrateArgs {

@@ -65,6 +65,15 @@ ExperimentSchema make_schema(ExperimentType type) {
                                    kPi / 2.0,
                                    {},
                                    false});
+      // How the repetitions were laid: the fillet put back (turned a little) for each, or laid
+      // once for all. It decides how an ensemble's placement spread is judged (diagnose).
+      schema.conditions.push_back({"placement",
+                                   Kind::kLabel,
+                                   Quantity::kDimensionless,
+                                   0,
+                                   0,
+                                   {"relaid", "laid_once"},
+                                   false});
       break;
     case ExperimentType::kBend:
       schema.columns = {{"bend_angle", Quantity::kAngle, -kPi, kPi, true}};

@@ -118,8 +118,9 @@ std::vector<std::string> names_of(const std::vector<EffectRange>& effects) {
 // The thesis' three fillet sizes (table 3.1), in the order the generated trials take them.
 constexpr const char* kVariants[] = {"144x72x40", "172x72x32", "176x72x40"};
 
-// Trial k of a slide dataset: the variants in turn, each dry then wet; `repetitions` rows.
-Trial slide_trial(int k, int repetitions) {
+// Trial k of a slide dataset: the variants in turn, each dry then wet; `repetitions` rows, the
+// fillet re-laid for each or laid once for all.
+Trial slide_trial(int k, int repetitions, bool relaid) {
   const std::string variant = kVariants[static_cast<std::size_t>(k / 2) % 3];
   const std::string surface = k % 2 == 0 ? "dry" : "wet";
   Trial trial;
@@ -128,6 +129,7 @@ Trial slide_trial(int k, int repetitions) {
   trial.conditions["variant"] = variant;
   trial.conditions["mirrored"] = false;
   trial.conditions["surface"] = surface;
+  trial.conditions["placement"] = std::string(relaid ? "relaid" : "laid_once");
   trial.data.channels = {{"onset_angle", *find_unit("deg"),
                           std::vector<double>(static_cast<std::size_t>(repetitions), 0.0)}};
   trial.data.lines.resize(static_cast<std::size_t>(repetitions));
@@ -405,6 +407,9 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
         "generator: the compress row interval must be above 0 and at most 5 ms, a tenth of the "
         "third trial's 50 ms ramp");
   }
+  if (options.slide_relaid && !slide) {
+    throw std::invalid_argument("generator: re-laying the fillet is for slide datasets only");
+  }
   for (const double rate : options.slide_tilt_rates_deg_per_s) {
     if (!(rate >= 0.1 && rate <= 90.0)) {
       throw std::invalid_argument("generator: a slide tilt rate must be 0.1 to 90 deg/s, not " +
@@ -472,11 +477,11 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
     if (slide) {
       const std::vector<double>& rates = options.slide_tilt_rates_deg_per_s;
       if (rates.empty()) {
-        trial = slide_trial(k, options.repetitions);
+        trial = slide_trial(k, options.repetitions, options.slide_relaid);
       } else {
         const auto per_trial = static_cast<int>(rates.size());
         const double rate = rates[static_cast<std::size_t>(k % per_trial)];
-        trial = slide_trial(k / per_trial, options.repetitions);
+        trial = slide_trial(k / per_trial, options.repetitions, options.slide_relaid);
         trial.id += "_" + detail::significant(rate, 3) + "dps";
         trial.conditions["tilt_rate"] = rate * std::numbers::pi / 180.0;
       }
@@ -524,9 +529,22 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
       data.trials.push_back(std::move(trial));
       continue;
     }
-    const Table response = truth->run(data, trial);
     std::vector<double>& measured = trial.data.channels.back().values_si;
-    measured = response.at(channel).values_si;
+    if (slide && options.slide_relaid) {
+      // Each row its own slide, the fillet turned anew.
+      TwinSettings relaid;
+      std::uniform_real_distribution<double> turn_deg(-relaid.slide.placement_tolerance_deg,
+                                                      relaid.slide.placement_tolerance_deg);
+      for (double& value : measured) {
+        relaid.slide.placement_yaw_deg = turn_deg(random);
+        value = make_twin_model(options.experiment, truth_common, relaid)
+                    ->run(data, trial)
+                    .at(channel)
+                    .values_si.front();
+      }
+    } else {
+      measured = truth->run(data, trial).at(channel).values_si;
+    }
     if (noise_si > 0.0) {
       for (double& value : measured) value += noise(random);
     }

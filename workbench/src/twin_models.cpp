@@ -246,9 +246,11 @@ Table TwinSlideModel::run(const Dataset& dataset, const Trial& trial) {
   double sum_rad = 0.0;
   double sum_sq_rad = 0.0;
   for (int member = 0; member < runs; ++member) {
-    // Evenly spaced over the tolerance, centred (one run: laid straight, as before).
+    // Evenly spaced over the tolerance about the placement (one run: at the placement).
     const double share = (member + 0.5) / runs;
-    params.placement_yaw_rad = settings_.placement_tolerance_deg * kRadPerDeg * (2.0 * share - 1.0);
+    params.placement_yaw_rad =
+        (settings_.placement_yaw_deg + settings_.placement_tolerance_deg * (2.0 * share - 1.0)) *
+        kRadPerDeg;
     const model_tests::SlideResult result = model_tests::run_slide(params);
     if (!result.slide_angle_deg) {
       std::ostringstream reason;

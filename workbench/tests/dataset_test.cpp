@@ -133,6 +133,19 @@ TEST(Dataset, ConditionsNeedTheirQuantityAndRange) {
   EXPECT_TRUE(has_problem(problems, "manifest.yaml", 8, "'damp' is not one of dry, wet"));
 }
 
+TEST(Dataset, ASlidesPlacementIsRelaidOrLaidOnce) {
+  const DatasetFolder folder;
+  folder.write("a.csv", "onset_angle [deg]\n30.1\n29.8\n");
+  // Line 5: how a lab might write "turned a little each time"; diagnose could not tell.
+  folder.write("manifest.yaml",
+               manifest("slide", "conditions:\n  placement: sideways\n", kOneTrial));
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 5,
+                          "'sideways' is not one of relaid, laid_once"));
+  folder.write("manifest.yaml", manifest("slide", "conditions:\n  placement: relaid\n", kOneTrial));
+  const Dataset loaded = load_dataset(folder.path());
+  EXPECT_EQ(std::get<std::string>(loaded.trials[0].conditions.at("placement")), "relaid");
+}
+
 TEST(Dataset, RequiredConditionMayComeFromEitherLevelButMustCome) {
   const DatasetFolder folder;
   folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,0,0\n");

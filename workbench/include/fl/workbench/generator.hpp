@@ -70,6 +70,10 @@ struct GeneratorOptions {
   // empty: the twin's 5 deg/s, no condition written. A rate-dependent friction shows itself
   // against a rate-independent one only across rates (docs/measurements.md).
   std::vector<double> slide_tilt_rates_deg_per_s;
+  // Slide: each repetition re-lays the fillet, turned uniformly within SlideSettings' placement
+  // tolerance, as a lab puts the fillet back after each slide: the rows then scatter by the
+  // placement as well as the noise. false: laid once, straight; the rows differ by the noise.
+  bool slide_relaid = false;
   model_tests::CommonParams common;  // the base model (appendix B, 7 mm) the effect joins
 };
 

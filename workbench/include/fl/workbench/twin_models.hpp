@@ -45,6 +45,9 @@ struct SlideSettings {
   double max_angle_deg = 80.0;
   int ensemble_runs = 1;
   double placement_tolerance_deg = 5.0;
+  // The fillet's turn about the vertical, counter-clockwise seen from above: one run's, or the
+  // centre of an ensemble's placements. What a generator re-laying the fillet varies.
+  double placement_yaw_deg = 0.0;
 };
 
 // Slide test (thesis 3.4.1): a flexible fillet of the trial's `variant` (default 172x72x32) and
