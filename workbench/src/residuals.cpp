@@ -9,6 +9,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <variant>
 
 #include "fl/workbench/twin_models.hpp"
 
@@ -19,6 +20,21 @@ std::string_view judged_channel(ExperimentType type) {
   return response_channels(type).front();
 }
 
+namespace {
+
+Placement placement_of(const Trial& trial) {
+  const auto found = trial.conditions.find("placement");
+  if (found == trial.conditions.end()) return Placement::kUnstated;
+  const std::string* label = std::get_if<std::string>(&found->second);
+  if (label != nullptr && *label == "relaid") return Placement::kRelaid;
+  if (label != nullptr && *label == "laid_once") return Placement::kLaidOnce;
+  // The loader refuses other labels; a dataset made in code may not have been loaded.
+  throw std::invalid_argument("trial '" + trial.id +
+                              "': placement is neither relaid nor laid_once");
+}
+
+}  // namespace
+
 Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& common,
                     const std::vector<std::size_t>& trials, const TwinSettings& settings) {
   const std::string_view channel = judged_channel(dataset.experiment);
@@ -27,10 +43,11 @@ Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& com
   Residuals r;
   for (const std::size_t index : trials) {
     const Trial& trial = dataset.trials[index];
+    TrialRepetitions repetitions;
+    repetitions.placement = placement_of(trial);  // before the twin runs: refused at once
     const Table predicted = model->run(dataset, trial);
     const std::vector<double>& measured = trial.data.at(channel).values_si;
     const std::vector<double>& modelled = predicted.at(channel).values_si;
-    TrialRepetitions repetitions;
     repetitions.rows = measured.size();
     double spread_ss = 0.0;
     for (std::size_t k = 0; k < measured.size(); ++k) {
@@ -95,18 +112,33 @@ std::optional<RepetitionScoring> repetition_scoring(const Dataset& dataset,
 double repetition_deviance(const std::vector<TrialRepetitions>& trials,
                            const RepetitionScoring& scoring) {
   constexpr double kTwoPi = 6.283185307179586;
-  const double w = scoring.within_variance;
-  // The part of the rows' scatter beyond the stated noise: placement scatter they already show.
-  const double shown = scoring.stated_noise_variance > 0.0
-                           ? std::max(0.0, w - scoring.stated_noise_variance)
-                           : std::numeric_limits<double>::infinity();
+  const double pooled = scoring.within_variance;
+  const bool noise_stated = scoring.stated_noise_variance > 0.0;
+  const double noise_sq = noise_stated ? scoring.stated_noise_variance : pooled;
+  // Unstated: the part of the pooled scatter beyond the stated noise is placement scatter the
+  // rows already show; without a stated noise all of it is taken to be (re-laid).
+  const double shown =
+      noise_stated ? std::max(0.0, pooled - noise_sq) : std::numeric_limits<double>::infinity();
   double deviance = 0.0;
   for (const TrialRepetitions& trial : trials) {
     if (trial.rows == 0) continue;
     const auto n = static_cast<double>(trial.rows);
     const double spread_sq = trial.model_spread * trial.model_spread;
-    const double shared =
-        spread_sq / (scoring.ensemble_runs + 1.0) + std::max(0.0, spread_sq - shown);
+    const double mean_error = spread_sq / (scoring.ensemble_runs + 1.0);
+    double w = pooled;
+    double shared = mean_error + std::max(0.0, spread_sq - shown);
+    if (trial.placement == Placement::kRelaid) {
+      w = noise_stated ? noise_sq + spread_sq : pooled;
+      shared = mean_error;
+    } else if (trial.placement == Placement::kLaidOnce) {
+      w = noise_sq;
+      shared = mean_error + spread_sq;
+    }
+    if (!(w > 0.0)) {
+      throw std::invalid_argument(
+          "repetition deviance: no scatter to judge an offset against (no noise stated and "
+          "rows that do not scatter)");
+    }
     const double v = w / n + shared;
     const double offset = trial.measured_mean - trial.model_mean;
     deviance += n * std::log(kTwoPi) + (n - 1.0) * std::log(w) + std::log(n) + std::log(v) +

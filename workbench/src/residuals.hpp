@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string_view>
@@ -19,9 +20,13 @@ namespace fl::workbench::detail {
 // type the twin does not reproduce.
 std::string_view judged_channel(ExperimentType type);
 
+// How a trial's repetitions were laid (a slide trial's `placement` condition).
+enum class Placement : std::uint8_t { kUnstated, kRelaid, kLaidOnce };
+
 // One trial's rows read as repetitions of one answer (a slide's onset angle): what the
 // repetition deviance needs of it.
 struct TrialRepetitions {
+  Placement placement = Placement::kUnstated;
   std::size_t rows = 0;
   double measured_mean = 0.0;
   double within_ss = 0.0;  // the measured rows' squared scatter about their mean
@@ -38,7 +43,8 @@ struct Residuals {
 };
 
 // Sum of squared residuals of the judged channel over the chosen trials, the twin built from
-// `common` and `settings`. Throws what the twin throws for a trial it cannot run.
+// `common` and `settings`. Throws what the twin throws for a trial it cannot run, and
+// std::invalid_argument for a placement condition other than relaid or laid_once.
 Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& common,
                     const std::vector<std::size_t>& trials, const TwinSettings& settings = {});
 
@@ -66,13 +72,20 @@ std::optional<RepetitionScoring> repetition_scoring(const Dataset& dataset,
 
 // -2 ln of the likelihood of the trials' rows. A trial's n rows are its answer plus an offset
 // shared by all of them plus a scatter of their own:
-//   y_i = m + d + e_i,  e_i ~ N(0, within_variance),  d ~ N(0, shared variance),
-// the shared variance being the ensemble mean's own error (spread^2 / (runs + 1)) and the
-// placement scatter (spread^2) the rows do not already show: all of it when their scatter is
-// the stated noise (the fillet lay once), none when it is the noise and the spread together
-// (re-laid every time), none without a stated noise. Exact for the multivariate normal:
+//   y_i = m + d + e_i,  e_i ~ N(0, w),  d ~ N(0, shared),
+// the shared variance being the ensemble mean's own error (spread^2 / (runs + 1)) plus the
+// placement scatter (spread^2) where the fillet lay once for all rows; where it was re-laid for
+// each the placement scatter is each row's own. By the trial's placement:
+//   relaid:    w = noise^2 + spread^2,  shared = spread^2 / (runs + 1)
+//   laid_once: w = noise^2,             shared = spread^2 / (runs + 1) + spread^2
+//   unstated:  w = the pooled scatter,  shared = spread^2 / (runs + 1) plus the part of spread^2
+//              the pooled scatter does not show beyond the noise (none without a noise:
+//              re-laid, the usual lab protocol, is taken)
+// with noise^2 the stated noise (the pooled scatter where none is stated; then a re-laid
+// trial's w is the pooled scatter too). Exact for the multivariate normal:
 //   n ln 2pi + (n - 1) ln w + ln n + ln V + W / w + (mean - m)^2 / V,  V = w / n + shared,
-// with w the within variance and W the rows' squared scatter about their mean.
+// with W the rows' squared scatter about their mean. Throws std::invalid_argument for a
+// variance of 0 (no noise stated and rows that do not scatter).
 double repetition_deviance(const std::vector<TrialRepetitions>& trials,
                            const RepetitionScoring& scoring);
 

@@ -44,31 +44,77 @@ double direct_deviance(const std::vector<double>& rows, double mean, double w, d
 const std::vector<double> kRows{10.3, 9.6, 10.9, 10.1, 9.8};
 const std::vector<double> kOtherRows{12.0, 12.5, 11.6};
 
-TEST(RepetitionDeviance, IsTheMultivariateNormalOfRowsSharingAnOffset) {
-  // A fillet laid once (the rows' scatter is the stated noise): the whole spread is shared,
-  // plus the ensemble mean's own error, spread^2 / (runs + 1).
-  const RepetitionScoring laid_once{
-      .within_variance = 0.25, .stated_noise_variance = 0.25, .ensemble_runs = 4};
-  const double spread = 0.6;
-  const double shared = spread * spread / 5.0 + spread * spread;
-  const std::vector<TrialRepetitions> trials{trial_of(kRows, 9.5, spread),
-                                             trial_of(kOtherRows, 12.4, spread)};
-  const double expected =
-      direct_deviance(kRows, 9.5, 0.25, shared) + direct_deviance(kOtherRows, 12.4, 0.25, shared);
-  EXPECT_NEAR(repetition_deviance(trials, laid_once), expected, 1e-9 * std::abs(expected));
+// The scoring of these tests: rows pooled at 0.3 against a stated noise of 0.25 (0.5 squared),
+// an ensemble of four; the model's spread 0.6, so spread^2 = 0.36 and the mean's own error
+// 0.36 / 5.
+const RepetitionScoring kScoring{
+    .within_variance = 0.3, .stated_noise_variance = 0.25, .ensemble_runs = 4};
+constexpr double kSpread = 0.6;
+
+TrialRepetitions placed(TrialRepetitions trial, Placement placement) {
+  trial.placement = placement;
+  return trial;
 }
 
-TEST(RepetitionDeviance, RowsThatShowTheSpreadShareOnlyTheEnsembleMeansError) {
-  // Re-laid every repetition: the rows scatter by the noise and the spread together (0.25 +
-  // 0.36), so only the ensemble mean's own error, 0.36 / 5, is shared.
-  const RepetitionScoring relaid{
-      .within_variance = 0.61, .stated_noise_variance = 0.25, .ensemble_runs = 4};
-  const std::vector<TrialRepetitions> trials{trial_of(kRows, 9.5, 0.6)};
+TEST(RepetitionDeviance, LaidOnceIsTheMultivariateNormalOfRowsSharingTheWholeSpread) {
+  // The rows scatter by the stated noise only (not the pooled 0.3) and share one placement's
+  // offset, spread^2, plus the ensemble mean's own error.
+  const std::vector<TrialRepetitions> trials{
+      placed(trial_of(kRows, 9.5, kSpread), Placement::kLaidOnce),
+      placed(trial_of(kOtherRows, 12.4, kSpread), Placement::kLaidOnce)};
+  const double shared = 0.36 / 5.0 + 0.36;
+  const double expected =
+      direct_deviance(kRows, 9.5, 0.25, shared) + direct_deviance(kOtherRows, 12.4, 0.25, shared);
+  EXPECT_NEAR(repetition_deviance(trials, kScoring), expected, 1e-9 * std::abs(expected));
+}
+
+TEST(RepetitionDeviance, RelaidRowsScatterByTheSpreadAndShareOnlyTheMeansError) {
+  // Each row its own placement: noise and spread scatter every row (0.25 + 0.36).
+  const std::vector<TrialRepetitions> trials{
+      placed(trial_of(kRows, 9.5, kSpread), Placement::kRelaid)};
   const double expected = direct_deviance(kRows, 9.5, 0.61, 0.36 / 5.0);
-  EXPECT_NEAR(repetition_deviance(trials, relaid), expected, 1e-9 * std::abs(expected));
-  // Without a stated noise nothing says the fillet lay once: re-laid is taken, as above.
-  const RepetitionScoring unstated{.within_variance = 0.61, .ensemble_runs = 4};
-  EXPECT_NEAR(repetition_deviance(trials, unstated), expected, 1e-9 * std::abs(expected));
+  EXPECT_NEAR(repetition_deviance(trials, kScoring), expected, 1e-9 * std::abs(expected));
+  // Without a stated noise the pooled scatter is all there is to go on.
+  const RepetitionScoring unstated_noise{.within_variance = 0.3, .ensemble_runs = 4};
+  const double pooled = direct_deviance(kRows, 9.5, 0.3, 0.36 / 5.0);
+  EXPECT_NEAR(repetition_deviance(trials, unstated_noise), pooled, 1e-9 * std::abs(pooled));
+}
+
+TEST(RepetitionDeviance, AnUnstatedPlacementSharesTheSpreadTheRowsDoNotShow) {
+  const std::vector<TrialRepetitions> trials{trial_of(kRows, 9.5, kSpread)};
+  const auto scored = [&](double pooled, double noise_sq) {
+    return repetition_deviance(
+        trials, {.within_variance = pooled, .stated_noise_variance = noise_sq, .ensemble_runs = 4});
+  };
+  // Rows at 0.61 = 0.25 + 0.36 already show the whole spread: only the mean's error is shared.
+  EXPECT_NEAR(scored(0.61, 0.25), direct_deviance(kRows, 9.5, 0.61, 0.36 / 5.0), 1e-9);
+  // Rows at 0.25, the noise, show none of it: all of it is shared.
+  EXPECT_NEAR(scored(0.25, 0.25), direct_deviance(kRows, 9.5, 0.25, 0.36 / 5.0 + 0.36), 1e-9);
+  // Rows at 0.3 show 0.05 of the 0.36: 0.31 is shared.
+  EXPECT_NEAR(scored(0.3, 0.25), direct_deviance(kRows, 9.5, 0.3, 0.36 / 5.0 + 0.31), 1e-9);
+  // No stated noise: nothing says the fillet lay once, so re-laid is taken.
+  EXPECT_NEAR(scored(0.3, 0.0), direct_deviance(kRows, 9.5, 0.3, 0.36 / 5.0), 1e-9);
+}
+
+TEST(RepetitionDeviance, RelaidRowsThatScatterBeyondTheNoiseNeedAModelWithSpread) {
+  // Ten re-laid rows at +-0.8 (scatter 0.64) against a noise of 0.09: a model without spread
+  // calls that 7 noise variances a row; one whose placements scatter by sqrt(0.55) explains
+  // it (0.09 + 0.55 = 0.64). Same mean, so only the rows' scatter decides.
+  std::vector<double> rows;
+  for (int k = 0; k < 10; ++k) rows.push_back(k % 2 == 0 ? 0.8 : -0.8);
+  const RepetitionScoring scoring{
+      .within_variance = 0.64, .stated_noise_variance = 0.09, .ensemble_runs = 8};
+  const double without =
+      repetition_deviance({placed(trial_of(rows, 0.0, 0.0), Placement::kRelaid)}, scoring);
+  const double with = repetition_deviance(
+      {placed(trial_of(rows, 0.0, std::sqrt(0.55)), Placement::kRelaid)}, scoring);
+  // 6.4 / 0.09 + 9 ln 0.09 + ln 0.009 against 6.4 / 0.64 + 9 ln 0.64 + ln(0.064 + 0.55 / 9):
+  // 44.7 against 3.9.
+  EXPECT_NEAR(without - with,
+              (6.4 / 0.09 + 9.0 * std::log(0.09) + std::log(0.009)) -
+                  (6.4 / 0.64 + 9.0 * std::log(0.64) + std::log(0.064 + 0.55 / 9.0)),
+              1e-9);
+  EXPECT_GT(without - with, 40.0);
 }
 
 TEST(RepetitionDeviance, AModelWhoseSpreadCoversItsOffsetBeatsAnExactOneThatMissesIt) {
@@ -148,6 +194,18 @@ TEST(RepetitionScoringOf, LeavesTheResidualSumToJudgeWhereItCannotScore) {
   Dataset compress = slide_dataset({{1.0, 3.0}, {4.0, 5.0}}, 0.5);
   compress.experiment = ExperimentType::kCompress;
   EXPECT_FALSE(repetition_scoring(compress, ensemble_of(4)));
+}
+
+TEST(RepetitionScoringOf, AnUnknownPlacementIsRefusedBeforeAnyTwinRuns) {
+  // A dataset made in code skips the loader's check; the residuals name the trial.
+  Dataset data = slide_dataset({{0.5, 0.52}}, 0.005);
+  data.trials[0].conditions["placement"] = std::string("sideways");
+  try {
+    (void)residuals(data, {}, {0}, ensemble_of(4));
+    FAIL() << "an unknown placement was accepted";
+  } catch (const std::invalid_argument& error) {
+    EXPECT_NE(std::string(error.what()).find("trial 't0': placement"), std::string::npos);
+  }
 }
 
 }  // namespace
