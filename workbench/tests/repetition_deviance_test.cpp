@@ -117,16 +117,27 @@ TEST(RepetitionDeviance, RelaidRowsThatScatterBeyondTheNoiseNeedAModelWithSpread
   EXPECT_GT(without - with, 40.0);
 }
 
-TEST(RepetitionDeviance, AModelWhoseSpreadCoversItsOffsetBeatsAnExactOneThatMissesIt) {
-  // Ten rows at noise 1 whose mean sits 2 off the model: 6.3 standard errors of the mean for
-  // a model without spread, but 0.9 sigma for one whose placements scatter by 2.
-  std::vector<double> rows(10, 12.0);
-  rows[0] = 11.0;
-  rows[1] = 13.0;
+struct ExactAndScattered {
+  double exact = 0.0;      // the model without spread
+  double scattered = 0.0;  // the same answer with a placement spread of 2
+};
+
+// Ten rows at noise 1 about `mean` (one 1 below it, one 1 above), scored against a model
+// answering 10, placement unstated with the rows at the noise: the whole spread is shared.
+ExactAndScattered scored_against_ten(double mean) {
+  std::vector<double> rows(10, mean);
+  rows[0] = mean - 1.0;
+  rows[1] = mean + 1.0;
   const RepetitionScoring scoring{
       .within_variance = 1.0, .stated_noise_variance = 1.0, .ensemble_runs = 8};
-  const double exact = repetition_deviance({trial_of(rows, 10.0, 0.0)}, scoring);
-  const double scattered = repetition_deviance({trial_of(rows, 10.0, 2.0)}, scoring);
+  return {repetition_deviance({trial_of(rows, 10.0, 0.0)}, scoring),
+          repetition_deviance({trial_of(rows, 10.0, 2.0)}, scoring)};
+}
+
+TEST(RepetitionDeviance, AModelWhoseSpreadCoversItsOffsetBeatsAnExactOneThatMissesIt) {
+  // The rows' mean sits 2 off the model: 6.3 standard errors of the mean for a model without
+  // spread, but 0.9 sigma for one whose placements scatter by 2.
+  const auto [exact, scattered] = scored_against_ten(12.0);
   // 4 / 0.1 + ln 0.1 against 4 / 4.544 + ln 4.544: 37.7 against 2.4.
   EXPECT_NEAR(exact - scattered,
               (4.0 / 0.1 + std::log(0.1)) -
@@ -136,15 +147,9 @@ TEST(RepetitionDeviance, AModelWhoseSpreadCoversItsOffsetBeatsAnExactOneThatMiss
 }
 
 TEST(RepetitionDeviance, ASpreadTheDataDoNotNeedCostsItsLogVariance) {
-  // The same rows on the model's answer: a spread of 2 only widens the likelihood, so it
-  // scores worse by ln(4.544 / 0.1) = 3.8, and a chaotic model cannot buy a fit with scatter.
-  std::vector<double> rows(10, 10.0);
-  rows[0] = 9.0;
-  rows[1] = 11.0;
-  const RepetitionScoring scoring{
-      .within_variance = 1.0, .stated_noise_variance = 1.0, .ensemble_runs = 8};
-  const double exact = repetition_deviance({trial_of(rows, 10.0, 0.0)}, scoring);
-  const double scattered = repetition_deviance({trial_of(rows, 10.0, 2.0)}, scoring);
+  // The rows on the model's answer: a spread of 2 only widens the likelihood, so it scores
+  // worse by ln(4.544 / 0.1) = 3.8, and a chaotic model cannot buy a fit with scatter.
+  const auto [exact, scattered] = scored_against_ten(10.0);
   EXPECT_NEAR(scattered - exact, std::log((0.1 + 4.0 / 9.0 + 4.0) / 0.1), 1e-9);
 }
 
