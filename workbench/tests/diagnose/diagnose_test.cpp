@@ -166,6 +166,20 @@ TEST(DiagnoseJudgement, TheVerdictNeverCallsAFailingModelComplete) {
   const std::string blind = diagnosis_verdict(unknown, options);
   EXPECT_EQ(blind.find("nothing missing"), std::string::npos) << blind;
   EXPECT_NE(blind.find("cannot be judged"), std::string::npos) << blind;
+  // A best whose spread alone wins the likelihood while its answers miss by more than the
+  // base's (RMS 6 against 5: up 20 %, though BIC down 100 and the held-out error down 40 %)
+  // is not proposed, and the verdict says why and what to measure.
+  Diagnosis chance = base_five_sigmas_off();
+  CandidateResult spread_only = fitted("static_kinetic_friction", 6.0, 3.0, 2);
+  spread_only.bic = chance.base_bic - 100.0;
+  spread_only.model_spread = 8.0;
+  rank_candidates(chance, {spread_only}, options);
+  EXPECT_FALSE(chance.ranked[0].proposed);
+  const std::string as_chance = diagnosis_verdict(chance, options);
+  EXPECT_NE(as_chance.find("only through its own spread"), std::string::npos) << as_chance;
+  EXPECT_NE(as_chance.find("RMS error up 20 %"), std::string::npos) << as_chance;
+  EXPECT_NE(as_chance.find("placement: relaid"), std::string::npos) << as_chance;
+  EXPECT_EQ(as_chance.find("does not lower the BIC"), std::string::npos) << as_chance;
   // A proposed effect that leaves the model 3 sigmas off says part is unexplained.
   Diagnosis partly = base_five_sigmas_off();
   rank_candidates(partly, {fitted("bpm_plastic", 3.0, 3.0, 1)}, options);
