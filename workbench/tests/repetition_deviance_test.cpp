@@ -100,8 +100,8 @@ TEST(RepetitionDeviance, RelaidRowsThatScatterBeyondTheNoiseNeedAModelWithSpread
   // Ten re-laid rows at +-0.8 (scatter 0.64) against a noise of 0.09: a model without spread
   // calls that 7 noise variances a row; one whose placements scatter by sqrt(0.55) explains
   // it (0.09 + 0.55 = 0.64). Same mean, so only the rows' scatter decides.
-  std::vector<double> rows;
-  for (int k = 0; k < 10; ++k) rows.push_back(k % 2 == 0 ? 0.8 : -0.8);
+  std::vector<double> rows(10, 0.8);
+  for (std::size_t k = 1; k < rows.size(); k += 2) rows[k] = -0.8;
   const RepetitionScoring scoring{
       .within_variance = 0.64, .stated_noise_variance = 0.09, .ensemble_runs = 8};
   const double without =
