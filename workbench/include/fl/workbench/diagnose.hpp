@@ -100,8 +100,8 @@ inline constexpr int kFirstPoseProbeRuns = 4;
 struct DiagnoseOptions {
   int max_evaluations = 100;  // per candidate
   int threads = 2;            // candidates fitted at once
-  // Proposed when BIC falls by more than this (Kass and Raftery: > 10 is very strong) and
-  // the held-out error falls by more than min_held_out_gain.
+  // Proposed when BIC falls by more than this (Kass and Raftery: > 10 is very strong), the
+  // held-out error falls by more than min_held_out_gain and the error over all trials falls.
   double min_bic_drop = 10.0;
   double min_held_out_gain = 0.2;
   // How the twins run: line tracks and slides may run an ensemble per trial
@@ -129,13 +129,14 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
 
 // diagnose()'s judgement of fitted candidates, given a diagnosis whose base figures (samples,
 // base_rmse, base_bic, base_held_out_rmse) are set: each candidate's BIC change and RMS fall,
-// ranked by BIC, the best proposed when it passes both tests, and indistinct_from set when a
-// runner-up passes too within min_bic_drop of it.
+// ranked by BIC, the best proposed when it passes the tests (DiagnoseOptions), and
+// indistinct_from set when a runner-up passes too within min_bic_drop of it.
 void rank_candidates(Diagnosis& diagnosis, std::vector<CandidateResult> results,
                      const DiagnoseOptions& options);
 // The one-paragraph verdict of a ranked diagnosis: what explains the failure, or that nothing
 // does; a base model still beyond twice the noise when nothing is proposed; a runner-up the
-// data cannot tell from the best; a line-track fit that hangs on its first poses.
+// data cannot tell from the best; a best that wins through its ensemble's spread alone; a fit
+// that hangs on its first poses or placement.
 [[nodiscard]] std::string diagnosis_verdict(const Diagnosis& diagnosis,
                                             const DiagnoseOptions& options);
 
