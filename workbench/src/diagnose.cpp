@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <memory>
 #include <mutex>
@@ -277,10 +278,11 @@ std::string diagnosis_verdict(const Diagnosis& diagnosis, const DiagnoseOptions&
     // The base model's own misfit in noise sigmas (an ensemble's spread counts as noise).
     const double floor_si = std::hypot(diagnosis.noise_si, diagnosis.base_model_spread);
     const bool base_fails = floor_si > 0.0 && diagnosis.base_rmse > 2.0 * floor_si;
-    verdict << (base_fails        ? "no candidate explains the failure: base RMS "
-                : floor_si == 0.0 ? "no candidate is proposed: base RMS "
-                                  : "nothing missing among the candidates: base RMS ")
-            << diagnosis.base_rmse;
+    std::string lead = base_fails        ? "no candidate explains the failure: base RMS "
+                       : floor_si == 0.0 ? "no candidate is proposed: base RMS "
+                                         : "nothing missing among the candidates: base RMS ";
+    if (by_spread_only) lead.front() = static_cast<char>(std::toupper(lead.front()));
+    verdict << lead << diagnosis.base_rmse;
     if (diagnosis.noise_si > 0.0) verdict << " against noise " << diagnosis.noise_si;
     if (!by_spread_only) {
       verdict << "; the best-ranked effect does not lower the BIC by " << options.min_bic_drop
