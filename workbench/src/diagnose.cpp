@@ -12,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <thread>
+#include <variant>
 
 #include "fl/twin/dem/config.hpp"
 #include "fl/workbench/twin_models.hpp"
@@ -104,7 +105,10 @@ CandidateResult fit(const Dataset& dataset, const model_tests::CommonParams& bas
       x = point;
     }
   }
-  detail::minimise_in_unit_box(fit_objective, x, start_value, 0.25, options.max_evaluations, who);
+  // A deviance restarts while it gains 1 (a likelihood ratio of e^0.5, a tenth of the
+  // proposal's min_bic_drop); its 1 % would be tens on slide data.
+  detail::minimise_in_unit_box(fit_objective, x, start_value, 0.25, options.max_evaluations, who,
+                               scoring ? 1.0 : 0.0);
   CandidateResult result;
   result.law = candidate.law;
   result.evaluations = context.evaluations;
@@ -270,10 +274,15 @@ std::string diagnosis_verdict(const Diagnosis& diagnosis, const DiagnoseOptions&
               << ") only through its own spread (" << best.model_spread
               << " RMS): its answers miss by more than the base model's (RMS error up "
               << -100.0 * best.improvement
-              << " %), so it calls the failure chance and is not proposed. Repetitions of one "
-                 "placement say little of an answer that turns on the placement: measure with "
-                 "the fillet re-laid for each repetition (placement: relaid), or diagnose with a "
-                 "larger ensemble. ";
+              << " %), so it calls the failure chance and is not proposed. ";
+      if (diagnosis.placement == "relaid") {
+        verdict << "The repetitions were re-laid already: diagnose with a larger ensemble, so "
+                   "that the model's spread is measured better. ";
+      } else {
+        verdict << "Repetitions of one placement say little of an answer that turns on the "
+                   "placement: measure with the fillet re-laid for each repetition (placement: "
+                   "relaid), or diagnose with a larger ensemble. ";
+      }
     }
     // The base model's own misfit in noise sigmas (an ensemble's spread counts as noise).
     const double floor_si = std::hypot(diagnosis.noise_si, diagnosis.base_model_spread);
@@ -326,6 +335,18 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   const std::optional<RepetitionScoring> scoring =
       detail::repetition_scoring(dataset, options.twin);
   diagnosis.score = scoring ? "repetition_likelihood" : "residual_sum";
+  for (const Trial& trial : dataset.trials) {
+    const auto stated = trial.conditions.find("placement");
+    const std::string* label =
+        stated == trial.conditions.end() ? nullptr : std::get_if<std::string>(&stated->second);
+    const std::string placement = label != nullptr ? *label : "unstated";
+    if (&trial == &dataset.trials.front()) {
+      diagnosis.placement = placement;
+    } else if (placement != diagnosis.placement) {
+      diagnosis.placement = "mixed";
+    }
+  }
+  if (diagnosis.placement == "unstated") diagnosis.placement.clear();
   std::vector<std::size_t> all_trials(dataset.trials.size());
   std::vector<double> base_trial_rmse(dataset.trials.size());
   Residuals base_all;
@@ -438,6 +459,7 @@ HiddenEffect proposed_effect(const Diagnosis& diagnosis) {
 std::string diagnosis_json(const Diagnosis& diagnosis) {
   nlohmann::json json{{"channel", diagnosis.channel},
                       {"score", diagnosis.score},
+                      {"placement", diagnosis.placement},
                       {"samples", diagnosis.samples},
                       {"noise_si", diagnosis.noise_si},
                       {"base_rmse_si", diagnosis.base_rmse},

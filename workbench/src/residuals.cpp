@@ -123,16 +123,20 @@ double repetition_deviance(const std::vector<TrialRepetitions>& trials,
   for (const TrialRepetitions& trial : trials) {
     if (trial.rows == 0) continue;
     const auto n = static_cast<double>(trial.rows);
+    // The spread is the members' SD s times sqrt(1 + 1/N) (ensemble_spread): one placement
+    // scatters by s^2, the ensemble mean errs by s^2 / N, and the two add up to spread^2.
+    const double runs = scoring.ensemble_runs;
     const double spread_sq = trial.model_spread * trial.model_spread;
-    const double mean_error = spread_sq / (scoring.ensemble_runs + 1.0);
+    const double placement_sq = spread_sq * runs / (runs + 1.0);
+    const double mean_error = placement_sq / runs;
     double w = pooled;
-    double shared = mean_error + std::max(0.0, spread_sq - shown);
+    double shared = mean_error + std::max(0.0, placement_sq - shown);
     if (trial.placement == Placement::kRelaid) {
-      w = noise_stated ? noise_sq + spread_sq : pooled;
+      w = noise_stated ? noise_sq + placement_sq : pooled;
       shared = mean_error;
     } else if (trial.placement == Placement::kLaidOnce) {
       w = noise_sq;
-      shared = mean_error + spread_sq;
+      shared = mean_error + placement_sq;
     }
     if (!(w > 0.0)) {
       throw std::invalid_argument(
@@ -175,7 +179,7 @@ double nlopt_objective(unsigned n, const double* x, double* gradient, void* data
 
 double minimise_in_unit_box(const UnitBoxObjective& objective, std::vector<double>& x,
                             double start_value, double initial_step, int max_evaluations,
-                            std::string_view who) {
+                            std::string_view who, double min_restart_gain) {
   const auto dimensions = static_cast<unsigned>(x.size());
   SearchContext context{&objective, who};
   const std::vector<double> lower(dimensions, 0.0);
@@ -204,8 +208,8 @@ double minimise_in_unit_box(const UnitBoxObjective& objective, std::vector<doubl
     if (status < 0) {
       spdlog::warn("{}: the local search stopped with status {}", who, static_cast<int>(status));
     }
-    // 1 % of the magnitude: a deviance can be negative.
-    const bool gained = found_value < best - 0.01 * std::abs(best);
+    const bool gained =
+        min_restart_gain > 0.0 ? found_value < best - min_restart_gain : found_value < 0.99 * best;
     if (found_value < best) {
       best = found_value;
       x = found;

@@ -72,15 +72,16 @@ std::optional<RepetitionScoring> repetition_scoring(const Dataset& dataset,
 
 // -2 ln of the likelihood of the trials' rows. A trial's n rows are its answer plus an offset
 // shared by all of them plus a scatter of their own:
-//   y_i = m + d + e_i,  e_i ~ N(0, w),  d ~ N(0, shared),
-// the shared variance being the ensemble mean's own error (spread^2 / (runs + 1)) plus the
-// placement scatter (spread^2) where the fillet lay once for all rows; where it was re-laid for
-// each the placement scatter is each row's own. By the trial's placement:
-//   relaid:    w = noise^2 + spread^2,  shared = spread^2 / (runs + 1)
-//   laid_once: w = noise^2,             shared = spread^2 / (runs + 1) + spread^2
-//   unstated:  w = the pooled scatter,  shared = spread^2 / (runs + 1) plus the part of spread^2
-//              the pooled scatter does not show beyond the noise (none without a noise:
-//              re-laid, the usual lab protocol, is taken)
+//   y_i = m + d + e_i,  e_i ~ N(0, w),  d ~ N(0, shared).
+// The model's spread (ensemble_spread: the members' SD s times sqrt(1 + 1/runs)) splits into
+// one placement's scatter, p = s^2 = spread^2 runs / (runs + 1), and the ensemble mean's own
+// error, p / runs. The mean's error is always shared; the placement scatter is shared where
+// the fillet lay once for all rows, and each row's own where it was re-laid for each:
+//   relaid:    w = noise^2 + p,        shared = p / runs
+//   laid_once: w = noise^2,            shared = p / runs + p   (= spread^2)
+//   unstated:  w = the pooled scatter, shared = p / runs plus the part of p the pooled scatter
+//              does not show beyond the noise (none without a noise: re-laid, the usual lab
+//              protocol, is taken)
 // with noise^2 the stated noise (the pooled scatter where none is stated; then a re-laid
 // trial's w is the pooled scatter too). Exact for the multivariate normal:
 //   n ln 2pi + (n - 1) ln w + ln n + ln V + W / w + (mean - m)^2 / V,  V = w / n + shared,
@@ -101,8 +102,11 @@ double guarded_value(const UnitBoxObjective& objective, const std::vector<double
 // Nelder-Mead for one dimension, which BOBYQA does not take), started at `x` with the given
 // step and left at the best point found (`start_value` is the objective there, already known
 // to the caller), every point guarded as by guarded_value. Returns the objective at `x`.
+// It restarts from where a search stopped while a restart still gains: 1 % of the value for
+// a sum of squares or an RMS (min_restart_gain 0), or min_restart_gain itself for a deviance,
+// whose zero is arbitrary.
 double minimise_in_unit_box(const UnitBoxObjective& objective, std::vector<double>& x,
                             double start_value, double initial_step, int max_evaluations,
-                            std::string_view who);
+                            std::string_view who, double min_restart_gain = 0.0);
 
 }  // namespace fl::workbench::detail

@@ -45,11 +45,11 @@ const std::vector<double> kRows{10.3, 9.6, 10.9, 10.1, 9.8};
 const std::vector<double> kOtherRows{12.0, 12.5, 11.6};
 
 // The scoring of these tests: rows pooled at 0.3 against a stated noise of 0.25 (0.5 squared),
-// an ensemble of four; the model's spread 0.6, so spread^2 = 0.36 and the mean's own error
-// 0.36 / 5.
+// an ensemble of four. The model's spread^2 is 0.45: one placement's scatter 0.36 (0.45 x 4/5,
+// ensemble_spread's sqrt(1 + 1/4) taken out) and the mean's own error 0.36 / 4 = 0.09.
 const RepetitionScoring kScoring{
     .within_variance = 0.3, .stated_noise_variance = 0.25, .ensemble_runs = 4};
-constexpr double kSpread = 0.6;
+const double kSpread = std::sqrt(0.45);
 
 TrialRepetitions placed(TrialRepetitions trial, Placement placement) {
   trial.placement = placement;
@@ -58,25 +58,25 @@ TrialRepetitions placed(TrialRepetitions trial, Placement placement) {
 
 TEST(RepetitionDeviance, LaidOnceIsTheMultivariateNormalOfRowsSharingTheWholeSpread) {
   // The rows scatter by the stated noise only (not the pooled 0.3) and share one placement's
-  // offset, spread^2, plus the ensemble mean's own error.
+  // offset plus the ensemble mean's own error: 0.36 + 0.09, the whole spread^2.
   const std::vector<TrialRepetitions> trials{
       placed(trial_of(kRows, 9.5, kSpread), Placement::kLaidOnce),
       placed(trial_of(kOtherRows, 12.4, kSpread), Placement::kLaidOnce)};
-  const double shared = 0.36 / 5.0 + 0.36;
+  const double shared = 0.45;
   const double expected =
       direct_deviance(kRows, 9.5, 0.25, shared) + direct_deviance(kOtherRows, 12.4, 0.25, shared);
   EXPECT_NEAR(repetition_deviance(trials, kScoring), expected, 1e-9 * std::abs(expected));
 }
 
 TEST(RepetitionDeviance, RelaidRowsScatterByTheSpreadAndShareOnlyTheMeansError) {
-  // Each row its own placement: noise and spread scatter every row (0.25 + 0.36).
+  // Each row its own placement: noise and placement scatter every row (0.25 + 0.36).
   const std::vector<TrialRepetitions> trials{
       placed(trial_of(kRows, 9.5, kSpread), Placement::kRelaid)};
-  const double expected = direct_deviance(kRows, 9.5, 0.61, 0.36 / 5.0);
+  const double expected = direct_deviance(kRows, 9.5, 0.61, 0.09);
   EXPECT_NEAR(repetition_deviance(trials, kScoring), expected, 1e-9 * std::abs(expected));
   // Without a stated noise the pooled scatter is all there is to go on.
   const RepetitionScoring unstated_noise{.within_variance = 0.3, .ensemble_runs = 4};
-  const double pooled = direct_deviance(kRows, 9.5, 0.3, 0.36 / 5.0);
+  const double pooled = direct_deviance(kRows, 9.5, 0.3, 0.09);
   EXPECT_NEAR(repetition_deviance(trials, unstated_noise), pooled, 1e-9 * std::abs(pooled));
 }
 
@@ -86,20 +86,22 @@ TEST(RepetitionDeviance, AnUnstatedPlacementSharesTheSpreadTheRowsDoNotShow) {
     return repetition_deviance(
         trials, {.within_variance = pooled, .stated_noise_variance = noise_sq, .ensemble_runs = 4});
   };
-  // Rows at 0.61 = 0.25 + 0.36 already show the whole spread: only the mean's error is shared.
-  EXPECT_NEAR(scored(0.61, 0.25), direct_deviance(kRows, 9.5, 0.61, 0.36 / 5.0), 1e-9);
+  // Rows at 0.61 = 0.25 + 0.36 already show the placement scatter: only the mean's error is
+  // shared.
+  EXPECT_NEAR(scored(0.61, 0.25), direct_deviance(kRows, 9.5, 0.61, 0.09), 1e-9);
   // Rows at 0.25, the noise, show none of it: all of it is shared.
-  EXPECT_NEAR(scored(0.25, 0.25), direct_deviance(kRows, 9.5, 0.25, 0.36 / 5.0 + 0.36), 1e-9);
+  EXPECT_NEAR(scored(0.25, 0.25), direct_deviance(kRows, 9.5, 0.25, 0.09 + 0.36), 1e-9);
   // Rows at 0.3 show 0.05 of the 0.36: 0.31 is shared.
-  EXPECT_NEAR(scored(0.3, 0.25), direct_deviance(kRows, 9.5, 0.3, 0.36 / 5.0 + 0.31), 1e-9);
+  EXPECT_NEAR(scored(0.3, 0.25), direct_deviance(kRows, 9.5, 0.3, 0.09 + 0.31), 1e-9);
   // No stated noise: nothing says the fillet lay once, so re-laid is taken.
-  EXPECT_NEAR(scored(0.3, 0.0), direct_deviance(kRows, 9.5, 0.3, 0.36 / 5.0), 1e-9);
+  EXPECT_NEAR(scored(0.3, 0.0), direct_deviance(kRows, 9.5, 0.3, 0.09), 1e-9);
 }
 
 TEST(RepetitionDeviance, RelaidRowsThatScatterBeyondTheNoiseNeedAModelWithSpread) {
   // Ten re-laid rows at +-0.8 (scatter 0.64) against a noise of 0.09: a model without spread
   // calls that 7 noise variances a row; one whose placements scatter by sqrt(0.55) explains
-  // it (0.09 + 0.55 = 0.64). Same mean, so only the rows' scatter decides.
+  // it (0.09 + 0.55 = 0.64). Its spread is sqrt(0.55 x 9/8) (ensemble_spread's sqrt(1 + 1/8)),
+  // its mean's own error 0.55 / 8. Same mean, so only the rows' scatter decides.
   std::vector<double> rows(10, 0.8);
   for (std::size_t k = 1; k < rows.size(); k += 2) rows[k] = -0.8;
   const RepetitionScoring scoring{
@@ -107,12 +109,12 @@ TEST(RepetitionDeviance, RelaidRowsThatScatterBeyondTheNoiseNeedAModelWithSpread
   const double without =
       repetition_deviance({placed(trial_of(rows, 0.0, 0.0), Placement::kRelaid)}, scoring);
   const double with = repetition_deviance(
-      {placed(trial_of(rows, 0.0, std::sqrt(0.55)), Placement::kRelaid)}, scoring);
-  // 6.4 / 0.09 + 9 ln 0.09 + ln 0.009 against 6.4 / 0.64 + 9 ln 0.64 + ln(0.064 + 0.55 / 9):
+      {placed(trial_of(rows, 0.0, std::sqrt(0.55 * 9.0 / 8.0)), Placement::kRelaid)}, scoring);
+  // 6.4 / 0.09 + 9 ln 0.09 + ln 0.009 against 6.4 / 0.64 + 9 ln 0.64 + ln(0.064 + 0.55 / 8):
   // 44.7 against 3.9.
   EXPECT_NEAR(without - with,
               (6.4 / 0.09 + 9.0 * std::log(0.09) + std::log(0.009)) -
-                  (6.4 / 0.64 + 9.0 * std::log(0.64) + std::log(0.064 + 0.55 / 9.0)),
+                  (6.4 / 0.64 + 9.0 * std::log(0.64) + std::log(0.064 + 0.55 / 8.0)),
               1e-9);
   EXPECT_GT(without - with, 40.0);
 }
@@ -123,7 +125,8 @@ struct ExactAndScattered {
 };
 
 // Ten rows at noise 1 about `mean` (one 1 below it, one 1 above), scored against a model
-// answering 10, placement unstated with the rows at the noise: the whole spread is shared.
+// answering 10, placement unstated with the rows at the noise: the whole spread^2 (one
+// placement's scatter and the mean's error) is shared.
 ExactAndScattered scored_against_ten(double mean) {
   std::vector<double> rows(10, mean);
   rows[0] = mean - 1.0;
@@ -136,21 +139,18 @@ ExactAndScattered scored_against_ten(double mean) {
 
 TEST(RepetitionDeviance, AModelWhoseSpreadCoversItsOffsetBeatsAnExactOneThatMissesIt) {
   // The rows' mean sits 2 off the model: 6.3 standard errors of the mean for a model without
-  // spread, but 0.9 sigma for one whose placements scatter by 2.
+  // spread, but 1 sigma for one whose spread is 2.
   const auto [exact, scattered] = scored_against_ten(12.0);
-  // 4 / 0.1 + ln 0.1 against 4 / 4.544 + ln 4.544: 37.7 against 2.4.
-  EXPECT_NEAR(exact - scattered,
-              (4.0 / 0.1 + std::log(0.1)) -
-                  (4.0 / (0.1 + 4.0 / 9.0 + 4.0) + std::log(0.1 + 4.0 / 9.0 + 4.0)),
-              1e-9);
+  // 4 / 0.1 + ln 0.1 against 4 / 4.1 + ln 4.1: 37.7 against 2.4.
+  EXPECT_NEAR(exact - scattered, (4.0 / 0.1 + std::log(0.1)) - (4.0 / 4.1 + std::log(4.1)), 1e-9);
   EXPECT_GT(exact - scattered, 30.0);
 }
 
 TEST(RepetitionDeviance, ASpreadTheDataDoNotNeedCostsItsLogVariance) {
   // The rows on the model's answer: a spread of 2 only widens the likelihood, so it scores
-  // worse by ln(4.544 / 0.1) = 3.8, and a chaotic model cannot buy a fit with scatter.
+  // worse by ln(4.1 / 0.1) = 3.7: scatter the data do not need is paid for.
   const auto [exact, scattered] = scored_against_ten(10.0);
-  EXPECT_NEAR(scattered - exact, std::log((0.1 + 4.0 / 9.0 + 4.0) / 0.1), 1e-9);
+  EXPECT_NEAR(scattered - exact, std::log(4.1 / 0.1), 1e-9);
 }
 
 Dataset slide_dataset(const std::vector<std::vector<double>>& rows_per_trial, double noise) {

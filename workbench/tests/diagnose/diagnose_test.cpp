@@ -181,6 +181,11 @@ TEST(DiagnoseJudgement, TheVerdictNeverCallsAFailingModelComplete) {
   EXPECT_NE(as_chance.find("placement: relaid"), std::string::npos) << as_chance;
   EXPECT_EQ(as_chance.find("does not lower the BIC"), std::string::npos) << as_chance;
   EXPECT_NE(as_chance.find(". No candidate explains the failure"), std::string::npos) << as_chance;
+  // Rows re-laid already: the advice is the larger ensemble alone.
+  chance.placement = "relaid";
+  const std::string relaid = diagnosis_verdict(chance, options);
+  EXPECT_NE(relaid.find("re-laid already"), std::string::npos) << relaid;
+  EXPECT_EQ(relaid.find("placement: relaid"), std::string::npos) << relaid;
   // A proposed effect that leaves the model 3 sigmas off says part is unexplained.
   Diagnosis partly = base_five_sigmas_off();
   rank_candidates(partly, {fitted("bpm_plastic", 3.0, 3.0, 1)}, options);

@@ -5,7 +5,13 @@
 // wide), not the generator's ranges.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <optional>
+#include <vector>
+
 #include "fl/workbench/diagnose.hpp"
+#include "fl/workbench/generator.hpp"
+#include "residuals.hpp"
 #include "workbench_test_support.hpp"
 
 namespace fl::workbench {
@@ -47,6 +53,54 @@ TEST(SlideDiagnose, ProposesNothingWhenResidualsAreAtTheNoise) {
   // failing might then be chance too.)
   EXPECT_GT(diagnosis.base_first_pose_spread, 0.0);
   EXPECT_LT(diagnosis.base_first_pose_spread, diagnosis.noise_si);
+}
+
+}  // namespace
+}  // namespace fl::workbench
+
+namespace fl::workbench {
+namespace {
+
+// An ensemble on slide rows is judged by the repetition likelihood end to end: the base's and
+// the fitted candidate's BIC are the deviance of their own residuals (plus k ln n), so the
+// fit, the ranking and what the deviance is tested on (repetition_deviance_test) are one.
+// Small on purpose: two trials of four tilts, an ensemble of two, one candidate, a short
+// search (about 30 slides).
+TEST(SlideDiagnose, AnEnsembleIsJudgedByTheLikelihoodOfItsRepetitions) {
+  GeneratorOptions generate;
+  generate.experiment = ExperimentType::kSlide;
+  generate.common = test::base_model();
+  generate.effect = "none";  // the plumbing is under test, not a proof
+  generate.trials = 2;       // the 144x72x40 fillet, dry and wet
+  generate.repetitions = 4;
+  generate.angle_noise_deg = test::kAngleNoiseDeg;
+  const Dataset data = generate_dataset(generate).dataset;
+  DiagnoseOptions options;
+  options.max_evaluations = 4;
+  options.twin.slide.ensemble_runs = 2;
+  const std::vector<EffectCandidate> candidates{slide_candidates().back()};
+  ASSERT_EQ(candidates[0].law, "rolling_resistance");
+  const Diagnosis diagnosis = diagnose(data, test::base_model(), candidates, options);
+  EXPECT_EQ(diagnosis.score, "repetition_likelihood");
+  EXPECT_EQ(diagnosis.placement, "laid_once");  // the generator lays the fillet once
+
+  const std::optional<detail::RepetitionScoring> scoring =
+      detail::repetition_scoring(data, options.twin);
+  ASSERT_TRUE(scoring.has_value());
+  const std::vector<std::size_t> both{0, 1};
+  const auto deviance_of = [&](const model_tests::CommonParams& model) {
+    return detail::repetition_deviance(detail::residuals(data, model, both, options.twin).trials,
+                                       *scoring);
+  };
+  // The twin is deterministic, so the figures agree to rounding.
+  EXPECT_NEAR(diagnosis.base_bic, deviance_of(test::base_model()), 1e-9);
+  ASSERT_EQ(diagnosis.ranked.size(), 1U);
+  const CandidateResult& fitted = diagnosis.ranked.front();
+  model_tests::CommonParams with_fit = test::base_model();
+  with_fit.base_spec = with_experiment_effect(with_fit.base_spec, ExperimentType::kSlide,
+                                              {fitted.law, fitted.fitted});
+  // One parameter over 8 rows: ln 8 of penalty.
+  EXPECT_NEAR(fitted.bic, deviance_of(with_fit) + std::log(8.0), 1e-9);
 }
 
 }  // namespace

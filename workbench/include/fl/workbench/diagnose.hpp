@@ -61,6 +61,9 @@ struct Diagnosis {
   // whose rows repeat one answer a trial (detail::repetition_deviance: a trial's mean offset
   // is judged against the rows' scatter and the ensemble's own spread).
   std::string score;
+  // A slide dataset's `placement` when every trial states the same one ("relaid",
+  // "laid_once"), "mixed" when they differ, empty when none states it (or not a slide).
+  std::string placement;
   std::size_t samples = 0;
   double base_rmse = 0.0;
   double base_bic = 0.0;
