@@ -182,6 +182,12 @@ TwinSlideModel::TwinSlideModel(model_tests::CommonParams common, SlideSettings s
         "the slide ensemble's placement tolerance must be above 0 and at most 45 deg, not " +
         std::to_string(settings_.placement_tolerance_deg));
   }
+  if (!(std::abs(settings_.placement_yaw_deg) + settings_.placement_tolerance_deg <= 45.0)) {
+    throw std::invalid_argument(
+        "the slide's placement turn and tolerance must stay within 45 deg, not " +
+        std::to_string(settings_.placement_yaw_deg) + " +- " +
+        std::to_string(settings_.placement_tolerance_deg));
+  }
 }
 
 std::string TwinSlideModel::describe() const {

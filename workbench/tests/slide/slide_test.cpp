@@ -99,8 +99,9 @@ TEST(SlideTwin, AnEnsembleShowsTheScatterOfStickAndSlipAndNotOfCoulomb) {
   // The ensemble is named in the model's description.
   EXPECT_NE(TwinSlideModel(sticky, four).describe().find("mean of 4 placements"),
             std::string::npos);
-  // Settings that cannot run are refused, saying which: no run, a fillet across the tilt, and
-  // an ensemble of one placement (the same run four times, spread 0).
+  // Settings that cannot run are refused, saying which: no run, a fillet across the tilt (by
+  // the tolerance, or the turn and the tolerance), and an ensemble of one placement (the same
+  // run four times, spread 0).
   auto refusal = [&](const SlideSettings& settings) {
     try {
       TwinSlideModel refused(sticky, settings);
@@ -112,6 +113,9 @@ TEST(SlideTwin, AnEnsembleShowsTheScatterOfStickAndSlipAndNotOfCoulomb) {
   EXPECT_NE(refusal({5.0, 80.0, 0, 5.0}).find("one run or more"), std::string::npos);
   EXPECT_NE(refusal({5.0, 80.0, 4, 60.0}).find("placement tolerance"), std::string::npos);
   EXPECT_NE(refusal({5.0, 80.0, 4, 0.0}).find("placement tolerance"), std::string::npos);
+  // A turn of 42 deg with 5 of tolerance would lay some members across the tilt.
+  EXPECT_NE(refusal({5.0, 80.0, 4, 5.0, -42.0}).find("within 45 deg"), std::string::npos);
+  EXPECT_EQ(refusal({5.0, 80.0, 4, 5.0, 40.0}), "");
 }
 
 TEST(SlideTwin, AFilletThatNeverSlidesIsReportedNotFatal) {

@@ -31,7 +31,8 @@ class TwinCompressModel final : public TrialModel {
 // `tilt_rate` condition; a fillet that has not slid by max_angle_deg is reported as failed
 // (atan 5.7 = 80 deg: no fillet friction is that high).
 // With ensemble_runs > 1 each trial is slid that many times, the fillet laid turned about the
-// vertical at evenly spaced angles within +-placement_tolerance_deg (a hand placement's), and
+// vertical at evenly spaced angles within +-placement_tolerance_deg (a hand placement's) about
+// placement_yaw_deg (0: straight; the turn plus the tolerance at most 45 deg), and
 // the answer is the members' mean with their spread as the channel onset_angle_spread (the
 // sample standard deviation times sqrt(1 + 1/runs), as the line-tracks ensemble), which compare
 // adds to the noise. Why: one run a trial is one draw where the onset turns on how the fillet
