@@ -12,7 +12,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <thread>
-#include <variant>
 
 #include "fl/twin/dem/config.hpp"
 #include "fl/workbench/twin_models.hpp"
@@ -335,18 +334,6 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   const std::optional<RepetitionScoring> scoring =
       detail::repetition_scoring(dataset, options.twin);
   diagnosis.score = scoring ? "repetition_likelihood" : "residual_sum";
-  for (const Trial& trial : dataset.trials) {
-    const auto stated = trial.conditions.find("placement");
-    const std::string* label =
-        stated == trial.conditions.end() ? nullptr : std::get_if<std::string>(&stated->second);
-    const std::string placement = label != nullptr ? *label : "unstated";
-    if (&trial == &dataset.trials.front()) {
-      diagnosis.placement = placement;
-    } else if (placement != diagnosis.placement) {
-      diagnosis.placement = "mixed";
-    }
-  }
-  if (diagnosis.placement == "unstated") diagnosis.placement.clear();
   std::vector<std::size_t> all_trials(dataset.trials.size());
   std::vector<double> base_trial_rmse(dataset.trials.size());
   Residuals base_all;
@@ -358,6 +345,17 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
     base_all.samples += trial.samples;
     base_all.spread_ss += trial.spread_ss;
     base_all.trials.insert(base_all.trials.end(), trial.trials.begin(), trial.trials.end());
+  }
+  // The placement the residuals read of every trial (one reader of the condition).
+  for (const detail::TrialRepetitions& trial : base_all.trials) {
+    const std::string placement = trial.placement == detail::Placement::kRelaid     ? "relaid"
+                                  : trial.placement == detail::Placement::kLaidOnce ? "laid_once"
+                                                                                    : "";
+    if (&trial == &base_all.trials.front()) {
+      diagnosis.placement = placement;
+    } else if (placement != diagnosis.placement) {
+      diagnosis.placement = "mixed";
+    }
   }
   const std::size_t held_out = held_out_trial(dataset, base_trial_rmse);
   diagnosis.held_out_trial = dataset.trials[held_out].id;
