@@ -33,6 +33,7 @@
 
 #include "can_smoke_files.hpp"
 #include "candump_peer.hpp"
+#include "fl/drivers/can_config.hpp"
 #include "process_support.hpp"
 #include "two_process.hpp"
 
@@ -302,9 +303,10 @@ TEST_F(CanTwoProcess, ControllerFaultsWhenTheDevicesFallSilent) {
   EXPECT_GT(result["ledger"]["items_created"].get<int>(), 0);
 }
 
-// A controller that dies mid-run stops sending SYNC: the twin's drives stop on the safe
-// output image within 100 ms, as a drive's command timeout would, and the twin reports the
-// controller lost (exit 4) with every fillet it fed accounted for.
+// A controller that dies mid-run stops sending SYNC and its heartbeat. Every emulated device was
+// told at start-up to watch that heartbeat (can.yaml master); when it runs out each stops on
+// its own (drives quick-stop, modules switch their outputs off), as real devices would, and the
+// twin reports the controller lost (exit 4) with every fillet it fed accounted for.
 TEST_F(CanTwoProcess, TwinStopsTheBeltsWhenTheMasterFallsSilent) {
   const fs::path dir = kWorkDir / "master_lost";
   const RunningPair run = start_pair(dir, environment());
@@ -316,6 +318,9 @@ TEST_F(CanTwoProcess, TwinStopsTheBeltsWhenTheMasterFallsSilent) {
   const nlohmann::json result = load(dir / "twin.json");
   EXPECT_TRUE(result["twin"]["controller_lost"].get<bool>());
   EXPECT_GT(result["twin"]["stale_ticks"].get<int>(), 0);
+  // All 13 drives and 3 modules: the belts stopped because the devices did.
+  EXPECT_EQ(result["twin"]["can"]["devices_that_lost_the_master"].get<int>(),
+            static_cast<int>(kDriveCount + drivers::kIoModuleCount));
   EXPECT_TRUE(result["truth"]["balanced"].get<bool>());
   EXPECT_GT(result["truth"]["on_line_at_end"].get<int>(), 0);  // stopped, not emptied
 }

@@ -42,9 +42,10 @@ std::atomic<bool> g_twin_interrupted{false};
 extern "C" void on_twin_signal(int /*signal*/) { g_twin_interrupted.store(true); }
 
 constexpr std::int64_t kPeriodNs = 10'000'000;  // the line's scan period, as the runtime's
-// The drives keep the last command this long when commands stop arriving (a hiccup of the
-// controller's host), then the twin applies the safe output image, as the drives' own
-// command-timeout would: 10 scans, well beyond the runtime's 3-scan overrun fault.
+// Commands older than this mean the controller is gone: 10 scans, well beyond the runtime's
+// 3-scan overrun fault. Over DDS the twin then applies the safe output image, as the drives'
+// own command timeout would; on CAN the emulated devices decide, as real ones do, by the
+// master's heartbeat they were told to watch (can.yaml master.heartbeat_timeout_ms).
 constexpr std::int64_t kCommandStaleNs = 100'000'000;
 // After the controller has stopped the line (every drive disabled), fillets still on the
 // belts stay there; wait this long for the plant to report them gone before ending the run.
@@ -82,6 +83,11 @@ class ControllerLink {
   virtual void serve_until(std::int64_t deadline_ns, const std::atomic<bool>& interrupted) = 0;
   // The controller's newest commands; false when none arrived within kCommandStaleNs.
   virtual bool fresh_command(std::int64_t now_ns, OutputImage& out) = 0;
+  // What the plant runs on while no fresh command comes: `safe` (DDS), or what the devices
+  // themselves hold (CAN: they stop on their own when the master's heartbeat falls silent).
+  [[nodiscard]] virtual OutputImage without_controller(const OutputImage& safe) const {
+    return safe;
+  }
   // The plant's state before the first tick, for a link whose devices answer while the
   // controller starts up.
   virtual void set_initial_state(const InputImage& /*plant*/) {}
@@ -173,6 +179,9 @@ class CanLink final : public ControllerLink {
     out = devices_.commands();
     return true;
   }
+  [[nodiscard]] OutputImage without_controller(const OutputImage& /*safe*/) const override {
+    return devices_.commands();
+  }
   void set_initial_state(const InputImage& plant) override { devices_.set_plant_state(plant); }
   bool publish(std::uint64_t /*tick*/, std::int64_t /*scheduled_ns*/,
                const InputImage& plant) override {
@@ -188,7 +197,8 @@ class CanLink final : public ControllerLink {
                         {"tx_queue_full", bus.tx_queue_full},
                         {"tx_errors", bus.tx_errors},
                         {"rx_overruns", bus.rx_overruns},
-                        {"error_state", drivers::to_string(bus_.error_state())}};
+                        {"error_state", drivers::to_string(bus_.error_state())},
+                        {"devices_that_lost_the_master", devices_that_lost_the_master()}};
   }
   [[nodiscard]] std::string command_summary() const override {
     return fmt::format("{} SYNCs on {}, {} frames sent, {} received", syncs_seen_, interface_name_,
@@ -198,6 +208,19 @@ class CanLink final : public ControllerLink {
  private:
   // Every drive sees every SYNC; the first one's count stands for the bus.
   std::uint64_t syncs() { return devices_.drive(DriveId{}).counters().syncs; }
+  // Devices whose watch of the master's heartbeat ran out (and that then stopped themselves).
+  [[nodiscard]] std::size_t devices_that_lost_the_master() const {
+    std::size_t lost = 0;
+    for (std::size_t d = 0; d < kDriveCount; ++d) {
+      lost += devices_.drive(static_cast<DriveId>(d)).counters().heartbeats_lost > 0 ? 1 : 0;
+    }
+    for (std::size_t m = 0; m < drivers::kIoModuleCount; ++m) {
+      lost += devices_.module(static_cast<drivers::IoModuleId>(m)).counters().heartbeats_lost > 0
+                  ? 1
+                  : 0;
+    }
+    return lost;
+  }
 
   drivers::SocketCanBus bus_;
   drivers::emulation::LineDevices devices_;
@@ -325,7 +348,7 @@ int twin_serve_command(const TwinServeArgs& args) {
     if (woke_ns - scheduled_ns > kPeriodNs) ++stats.late_ticks;
 
     const bool fresh = link->fresh_command(woke_ns, command);
-    const OutputImage& applied = fresh ? command : safe;
+    const OutputImage applied = fresh ? command : link->without_controller(safe);
     if (fresh) ++stats.commands_applied;
     if (!fresh && line_ran) {
       ++stats.stale_ticks;

@@ -241,6 +241,13 @@ CanConfig read_can_config(YamlReader& reader, const LineConfig& line) {
       config.enable_timeout_ms = read_ms(startup, "enable_timeout_ms", 1, 60000);
       startup.finish();
     }
+    {
+      YamlMapReader master = root.map("master");
+      config.master.node_id = read_node_id(master);
+      config.master.heartbeat_producer_ms = read_ms(master, "heartbeat_producer_ms", 1, 65535);
+      config.master.heartbeat_timeout_ms = read_ms(master, "heartbeat_timeout_ms", 1, 65535);
+      master.finish();
+    }
     DriveDefaults defaults;
     {
       YamlMapReader scaling = root.map("drive_defaults");
@@ -391,6 +398,9 @@ CanConfig read_can_config(YamlReader& reader, const LineConfig& line) {
                            std::to_string(producer_ms) + " (one lost heartbeat is not a fault)");
     }
   };
+  claim_node(config.master.node_id, "master");
+  check_heartbeat(config.master.heartbeat_producer_ms, config.master.heartbeat_timeout_ms,
+                  "master.heartbeat_timeout_ms");
   for (std::size_t i = 0; i < kDriveCount; ++i) {
     const std::string path = "drives." + std::string(config_name(static_cast<DriveId>(i)));
     const DriveNodeConfig& node = config.drives[i];
@@ -415,6 +425,12 @@ CanConfig read_can_config(YamlReader& reader, const LineConfig& line) {
   }
   // A heartbeat timeout shorter than a cycle cannot be checked by a cyclic consumer.
   const double cycle_ms = static_cast<double>(config.cycle_period_ns) / 1e6;
+  // The master sends its heartbeat from the scan: at most once a cycle.
+  if (static_cast<double>(config.master.heartbeat_producer_ms) < cycle_ms) {
+    reader.report_at("master.heartbeat_producer_ms", ProblemKind::kInconsistent,
+                     "must be at least one scan cycle (" + format_number(cycle_ms) +
+                         " ms): the scan sends the master's heartbeat");
+  }
   if (static_cast<double>(config.drives[0].heartbeat_timeout_ms) < 2.0 * cycle_ms) {
     reader.report_at("drive_defaults.heartbeat_timeout_ms", ProblemKind::kInconsistent,
                      "must be at least two scan cycles (" + format_number(2.0 * cycle_ms) + " ms)");
@@ -456,6 +472,8 @@ double estimate_bus_load(const CanConfig& config) {
   }
   const DrivePdoMappings& drive_pdos = config.drive_pdos;
   double bits_per_cycle = canopen::worst_case_frame_bits(0);  // SYNC
+  bits_per_cycle += canopen::worst_case_frame_bits(1) * cycle_s * 1000.0 /
+                    std::max<double>(config.master.heartbeat_producer_ms, 1.0);
   for (const DriveNodeConfig& drive : config.drives) {
     // An RPDO with only the ramps is sent on change; a takt stroke changes them twice per
     // second at most: one per 50 cycles is a generous average.

@@ -19,6 +19,15 @@ constexpr std::uint16_t kTpdoCommunication = 0x1800;
 constexpr std::uint16_t kTpdoMapping = 0x1A00;
 constexpr std::size_t kPdoCount = 4;
 constexpr std::uint8_t kMaxSynchronousType = 240;  // 1..240: every n-th SYNC
+constexpr std::uint16_t kConsumerHeartbeat = 0x1016;
+constexpr std::uint16_t kErrorBehaviour = 0x1029;
+// CiA 301 error behaviour 0x1029:01 on a communication error.
+constexpr std::uint32_t kToPreOperational = 0;
+constexpr std::uint32_t kToStopped = 2;
+// EMCY "life guard error or heartbeat error" (CiA 301 table 26), error register bit 4
+// (communication error).
+constexpr std::uint16_t kHeartbeatErrorCode = 0x8130;
+constexpr std::uint8_t kCommunicationErrorRegister = 0x11;
 }  // namespace
 
 // ---------------------------------------------------------------- EmulatedNode
@@ -32,6 +41,12 @@ EmulatedNode::EmulatedNode(NodeId node, std::uint32_t device_type, std::string d
 
 void EmulatedNode::add_communication_objects() {
   add({0x1017, 0, 2, true, 0});  // heartbeat producer time, off until configured
+  // One consumed heartbeat (the master's): producer node in bits 16..23, time in ms in bits
+  // 0..15; 0 is off, as from the factory.
+  add({kConsumerHeartbeat, 0, 1, false, 1});
+  add({kConsumerHeartbeat, 1, 4, true, 0});
+  add({kErrorBehaviour, 0, 1, false, 1});
+  add({kErrorBehaviour, 1, 1, true, kToPreOperational});
   for (std::size_t n = 0; n < kPdoCount; ++n) {
     const auto offset = static_cast<std::uint16_t>(n);
     // Predefined connection set COB-IDs, valid, with empty mappings: the master must map.
@@ -89,6 +104,8 @@ void EmulatedNode::power_cycle() {
   sync_counters_ = {};
   rpdo_pending_ = {};
   upload_active_ = false;
+  consumer_armed_ = false;
+  heartbeat_error_ = false;
 }
 
 void EmulatedNode::fix_mapping(std::uint16_t mapping_index, const canopen::PdoMapping& mapping) {
@@ -115,6 +132,8 @@ void EmulatedNode::reset_communication() {
   sync_counters_ = {};
   rpdo_pending_ = {};
   upload_active_ = false;
+  consumer_armed_ = false;
+  heartbeat_error_ = false;
 }
 
 void EmulatedNode::send(CanBus& bus, const CanFrame& frame) {
@@ -132,6 +151,11 @@ void EmulatedNode::tick(CanBus& bus, std::int64_t now_ns) {
   if (silent_) {
     return;
   }
+  const std::int64_t consumer_ns = std::int64_t{value(kConsumerHeartbeat, 1) & 0xFFFFU} * 1'000'000;
+  if (consumer_armed_ && consumer_ns > 0 && now_ns - last_consumed_heartbeat_ns_ > consumer_ns) {
+    consumer_armed_ = false;  // until the producer is heard again
+    heartbeat_lost(bus);
+  }
   if (boot_pending_) {
     boot_pending_ = false;
     last_heartbeat_ns_ = now_ns;
@@ -145,8 +169,35 @@ void EmulatedNode::tick(CanBus& bus, std::int64_t now_ns) {
   }
 }
 
+void EmulatedNode::heartbeat_lost(CanBus& bus) {
+  ++counters_.heartbeats_lost;
+  if (nmt_ != NmtState::kStopped) {  // no EMCY while stopped (CiA 301 7.3.2)
+    heartbeat_error_ = true;
+    send_emcy(bus, kHeartbeatErrorCode, kCommunicationErrorRegister);
+  }
+  const std::uint32_t behaviour = value(kErrorBehaviour, 1);
+  if (behaviour == kToPreOperational && nmt_ == NmtState::kOperational) {
+    nmt_ = NmtState::kPreOperational;
+  } else if (behaviour == kToStopped) {
+    nmt_ = NmtState::kStopped;
+  }
+  on_heartbeat_lost();
+}
+
 void EmulatedNode::handle(CanBus& bus, const CanFrame& frame, std::int64_t now_ns) {
   if (silent_ || frame.extended || frame.remote) {
+    return;
+  }
+  const std::uint32_t consumer = value(kConsumerHeartbeat, 1);
+  const std::uint32_t producer = (consumer >> 16U) & 0x7FU;
+  if ((consumer & 0xFFFFU) != 0U && producer != 0U &&
+      frame.id == canopen::kHeartbeatBase + producer && frame.dlc >= 1) {
+    consumer_armed_ = true;  // monitoring starts with the first heartbeat (CiA 301 7.2.8.3.2.2)
+    last_consumed_heartbeat_ns_ = now_ns;
+    if (heartbeat_error_ && nmt_ != NmtState::kStopped) {
+      heartbeat_error_ = false;
+      send_emcy(bus, 0x0000, 0x00);  // the error is gone: error reset
+    }
     return;
   }
   if (frame.id == canopen::kNmtCobId) {
@@ -383,6 +434,9 @@ void EmulatedNode::handle_sdo(CanBus& bus, const CanFrame& frame) {
         }
       }
       set_value(request.address.index, request.address.subindex, request.value);
+      if (request.address.index == kConsumerHeartbeat) {
+        consumer_armed_ = false;  // a new consumer time waits for the next heartbeat
+      }
       on_write(request.address.index, request.address.subindex);
       send(bus, canopen::make_sdo_download_response(node_, request.address));
       return;
@@ -403,8 +457,10 @@ EmulatedCia402Drive::EmulatedCia402Drive(NodeId node, double counts_per_velocity
   add({0x6061, 0, 1, false, 0});
   add({0x6064, 0, 4, false, 0});
   add({0x606C, 0, 4, false, 0});
+  add({0x6007, 0, 2, true, 0});  // abort connection option: none until configured
   add({0x6083, 0, 4, true, 1});
   add({0x6084, 0, 4, true, 1});
+  add({0x6085, 0, 4, true, 1});
   add({0x60FF, 0, 4, true, 0});
   publish();
 }
@@ -451,8 +507,28 @@ void EmulatedCia402Drive::on_write(std::uint16_t index, std::uint8_t /*subindex*
     case 0x6084:
       state_.deceleration = std::max<std::uint32_t>(value(0x6084, 0), 1);
       break;
+    case 0x6085:
+      state_.quick_stop_deceleration = std::max<std::uint32_t>(value(0x6085, 0), 1);
+      break;
     default:
       break;
+  }
+  publish();
+}
+
+void EmulatedCia402Drive::on_heartbeat_lost() {
+  // CiA 402 0x6007: 1 fault signal, 2 disable voltage, 3 quick stop (the others are
+  // manufacturer specific or none).
+  const auto option = static_cast<std::int16_t>(sign_extend(value(0x6007, 0), 16));
+  const bool powered = state_.state == cia402::State::kOperationEnabled ||
+                       state_.state == cia402::State::kSwitchedOn ||
+                       state_.state == cia402::State::kReadyToSwitchOn;
+  if (option == 1) {
+    inject_fault(kHeartbeatErrorCode);
+  } else if (option == 2 && powered) {
+    state_.state = cia402::State::kSwitchOnDisabled;  // the motor coasts
+  } else if (option == 3 && state_.state == cia402::State::kOperationEnabled) {
+    state_.state = cia402::State::kQuickStopActive;
   }
   publish();
 }
@@ -479,8 +555,10 @@ void EmulatedCia402Drive::on_sync(CanBus& bus, std::int64_t now_ns) {
     const double target = following ? static_cast<double>(state_.target_velocity) : 0.0;
     const double current = static_cast<double>(state_.velocity_actual);
     const bool speeding_up = std::fabs(target) > std::fabs(current) && target * current >= 0.0;
-    const double rate =
-        static_cast<double>(speeding_up ? state_.acceleration : state_.deceleration);
+    const double rate = static_cast<double>(state_.state == cia402::State::kQuickStopActive
+                                                ? state_.quick_stop_deceleration
+                                            : speeding_up ? state_.acceleration
+                                                          : state_.deceleration);
     const double step = rate * dt_s;
     const double next = current + std::clamp(target - current, -step, step);
     state_.velocity_actual = static_cast<std::int32_t>(std::llround(next));
@@ -523,6 +601,28 @@ EmulatedCia401Io::EmulatedCia401Io(NodeId node)
   for (std::uint8_t channel = 1; channel <= 3; ++channel) {
     add({0x6401, channel, 2, false, 0});
     add({0x6411, channel, 2, true, 0});
+  }
+  // Output error modes and values (CiA 401): what the outputs become on a communication error.
+  // Digital: every output to its error value, all off (CiA 401's defaults). Analogue: kept
+  // unless configured.
+  add({0x6206, 1, 1, true, 0xFF});
+  add({0x6207, 1, 1, true, 0x00});
+  for (std::uint8_t channel = 1; channel <= 3; ++channel) {
+    add({0x6443, channel, 1, true, 0});
+    add({0x6444, channel, 4, true, 0});
+  }
+}
+
+void EmulatedCia401Io::on_heartbeat_lost() {
+  const auto mode = static_cast<std::uint8_t>(value(0x6206, 1));
+  const auto error_value = static_cast<std::uint8_t>(value(0x6207, 1));
+  state_.digital_outputs =
+      static_cast<std::uint8_t>((state_.digital_outputs & ~mode) | (error_value & mode));
+  for (std::uint8_t channel = 1; channel <= 3; ++channel) {
+    if (value(0x6443, channel) != 0U) {
+      state_.analog_outputs[channel - 1U] =
+          static_cast<std::int16_t>(sign_extend(value(0x6444, channel), 32));
+    }
   }
 }
 

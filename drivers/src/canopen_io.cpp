@@ -126,6 +126,13 @@ CanopenIo::CanopenIo(CanBus& bus, CanConfig config)
     nodes_[kDriveCount + m].timeout_ns =
         std::int64_t{config_.io_modules[m].heartbeat_timeout_ms} * 1'000'000;
   }
+  // Whole scans within the period, so that the heartbeat is never late (the loader refuses a
+  // period shorter than a scan).
+  const std::int64_t heartbeat_ns = std::int64_t{config_.master.heartbeat_producer_ms} * 1'000'000;
+  if (config_.cycle_period_ns > 0) {
+    heartbeat_every_ = static_cast<std::uint32_t>(
+        std::max<std::int64_t>(1, heartbeat_ns / config_.cycle_period_ns));
+  }
   build_routes();
 }
 
@@ -287,6 +294,9 @@ void CanopenIo::handle_frame(const CanFrame& frame, std::int64_t now_ns) {
         push_event(CanopenEventKind::kNmtStateChanged, node.id, now_ns,
                    static_cast<std::uint32_t>(*state), previous);
       }
+      // A configured node that fell to pre-operational by itself is started again; one that
+      // rebooted lost its configuration and waits for the next start-up.
+      node.start_wanted = *state == NmtState::kPreOperational && !nmt_commanded_ && !node.rebooted;
       return;
     }
     case Route::kEmergency: {
@@ -588,6 +598,25 @@ void CanopenIo::write(const OutputImage& out) {
     safety.digital = lamps;
     send_outputs(IoModuleId::kSafety, safety);
   }
+  for (NodeRuntime& node : nodes_) {
+    if (!node.start_wanted) continue;
+    node.start_wanted = false;
+    if (bus_.send(canopen::make_nmt(canopen::NmtCommand::kStart, node.id))) {
+      ++counters_.nodes_restarted;
+    } else {
+      ++counters_.send_failures;
+    }
+  }
+  // The master's heartbeat, which every device watches (0x1016:01): never later than its
+  // period, as the scans fall.
+  if (++scans_since_heartbeat_ >= heartbeat_every_) {
+    scans_since_heartbeat_ = 0;
+    if (bus_.send(canopen::make_heartbeat(config_.master.node_id, NmtState::kOperational))) {
+      ++counters_.heartbeats_sent;
+    } else {
+      ++counters_.send_failures;
+    }
+  }
   // SYNC last: synchronous RPDOs take effect at it, and the TPDOs it triggers carry the
   // state the next read() sees.
   if (bus_.send(canopen::make_sync())) {
@@ -747,6 +776,11 @@ bool CanopenIo::check_pdo_mapping(SdoClient& sdo, NodeId node, std::uint16_t map
   return true;
 }
 
+std::uint32_t CanopenIo::master_heartbeat_consumer() const {
+  // 0x1016:01: the producer's node id in bits 16..23, the consumer time in ms in bits 0..15.
+  return (std::uint32_t{config_.master.node_id} << 16U) | config_.master.heartbeat_timeout_ms;
+}
+
 bool CanopenIo::configure_drive(SdoClient& sdo, std::size_t d, std::vector<std::string>& problems) {
   const DriveNodeConfig& node = config_.drives[d];
   const DrivePdoMappings& pdos = config_.drive_pdos;
@@ -777,8 +811,13 @@ bool CanopenIo::configure_drive(SdoClient& sdo, std::size_t d, std::vector<std::
   };
   const std::uint32_t max_accel =
       acceleration_to_drive_units(static_cast<DriveId>(d), node.max_accel_mps2);
+  // Watch the master's heartbeat and quick-stop (0x6007 = 3) at the rated deceleration when it
+  // falls silent: a dead controller must not leave a belt running.
+  constexpr std::uint32_t kQuickStopOnLoss = 3;
   const bool written =
       write({0x1017, 0}, node.heartbeat_producer_ms, 2) &&
+      write({0x1016, 1}, master_heartbeat_consumer(), 4) &&
+      write({0x6007, 0}, kQuickStopOnLoss, 2) && write({0x6085, 0}, max_accel, 4) &&
       write_pdo(sdo, id, 0x1400, 0x1600, node.rpdo1_cob_id, transmission(drive_rpdos_[0]),
                 pdos.rpdo1, problems) &&
       write_pdo(sdo, id, 0x1401, 0x1601, node.rpdo2_cob_id, transmission(drive_rpdos_[1]),
@@ -823,9 +862,24 @@ bool CanopenIo::configure_io(SdoClient& sdo, std::size_t m, std::vector<std::str
                        " is not a CiA 401 I/O module");
     return false;
   }
-  const SdoResult heartbeat = sdo.download(id, {0x1017, 0}, node.heartbeat_producer_ms, 2);
-  if (!heartbeat.ok()) {
-    problems.push_back(who + ": SDO write 0x1017 failed: " + heartbeat.describe());
+  const auto write = [&](SdoAddress address, std::uint32_t value, std::uint8_t size) {
+    const SdoResult result = sdo.download(id, address, value, size);
+    if (!result.ok()) {
+      problems.push_back(who + ": SDO write " + hex_text(address.index, 4) + ":" +
+                         hex_text(address.subindex, 2) + " failed: " + result.describe());
+    }
+    return result.ok();
+  };
+  // Watch the master's heartbeat; when it falls silent every digital output goes off (flip
+  // plates back, roller up, lamps off) and every analogue output to 0 (hopper gate closed,
+  // leveller and centring shift at rest).
+  bool written = write({0x1017, 0}, node.heartbeat_producer_ms, 2) &&
+                 write({0x1016, 1}, master_heartbeat_consumer(), 4) &&
+                 write({0x6206, 1}, 0xFF, 1) && write({0x6207, 1}, 0x00, 1);
+  for (std::uint8_t channel = 1; channel <= 3 && written; ++channel) {
+    written = write({0x6443, channel}, 1, 1) && write({0x6444, channel}, 0, 4);
+  }
+  if (!written) {
     return false;
   }
   return write_pdo(sdo, id, 0x1400, 0x1600, node.rpdo1_cob_id, kSynchronous, config_.io_pdos.rpdo1,

@@ -105,6 +105,28 @@ TEST(CanConfig, HeartbeatTimeoutMustSpanTwoPeriods) {
   EXPECT_NE(problems.find("io_modules.safety.heartbeat_timeout_ms"), std::string::npos) << problems;
 }
 
+TEST(CanConfig, TheMastersHeartbeatIsCheckedLikeADevices) {
+  const CanConfig config = test::reference_can_config();
+  EXPECT_EQ(config.master.node_id, 127);
+  EXPECT_EQ(config.master.heartbeat_producer_ms, 20);
+  EXPECT_EQ(config.master.heartbeat_timeout_ms, 150);
+  const std::string master =
+      "  node_id: 127\n  heartbeat_producer_ms: 20\n  heartbeat_timeout_ms: 150";
+  // The bulk drive's node id; a timeout one period long (one lost heartbeat would stop the
+  // line); a period shorter than the 10 ms scan that sends it.
+  const std::string text =
+      replaced(reference_text(), master,
+               "  node_id: 1\n  heartbeat_producer_ms: 5\n  heartbeat_timeout_ms: 5");
+  const std::string problems = problems_of(text, test::reference_line_config());
+  EXPECT_NE(problems.find("drives.bulk.node_id"), std::string::npos) << problems;
+  EXPECT_NE(problems.find("also used by master"), std::string::npos) << problems;
+  EXPECT_NE(problems.find("master.heartbeat_timeout_ms"), std::string::npos) << problems;
+  EXPECT_NE(problems.find("master.heartbeat_producer_ms"), std::string::npos) << problems;
+  // Without the block the devices could not be told to watch the controller: refused.
+  const std::string without = replaced(reference_text(), "master:\n" + master + "\n", "");
+  EXPECT_NE(problems_of(without, test::reference_line_config()).find("master"), std::string::npos);
+}
+
 TEST(CanConfig, BusLoadOverTheLimitIsRefused) {
   // At 500 kbit/s the same traffic needs about 106 %.
   const std::string text =

@@ -359,10 +359,27 @@ TEST(CanopenIo, LostDriveFaultsWithinItsTimeoutAndRecovers) {
   EXPECT_FALSE(rig.in.drives[index(DriveId::kCentring)].ready);
   EXPECT_FALSE(rig.in.drives[index(DriveId::kGuide)].fault);  // the others carry on
 
+  // The cut cable also cut the drive off the master's heartbeat: back on the bus, the drive
+  // finds it silent for over its 150 ms, reports EMCY 0x8130, drops to pre-operational and
+  // quick-stops on its own (0x6007 = 3, set at start-up). The master starts the node again
+  // from its pre-operational heartbeat; the error reset follows the next master heartbeat, and
+  // the enable sequence runs once the drive stands.
   rig.drive(DriveId::kCentring).set_silent(false);
-  for (int i = 0; i < 10; ++i) {  // within one heartbeat period and a TPDO
+  bool quick_stopped = false;
+  int scans = 0;
+  for (; scans < 100 && !(rig.in.drives[index(DriveId::kCentring)].ready &&
+                          !rig.in.drives[index(DriveId::kCentring)].fault);
+       ++scans) {
     rig.scan(out);
+    quick_stopped = quick_stopped ||
+                    rig.drive(DriveId::kCentring).state().state == cia402::State::kQuickStopActive;
   }
+  EXPECT_TRUE(quick_stopped);
+  EXPECT_EQ(rig.drive(DriveId::kCentring).counters().heartbeats_lost, 1U);
+  EXPECT_EQ(rig.io.counters().nodes_restarted, 1U);
+  // Up to one 50 ms heartbeat period to learn of pre-operational, the stop from the command's
+  // 0.3 m/s at the belt's rated deceleration, and three enable transitions: well within 1 s.
+  EXPECT_LT(scans, 100);
   EXPECT_FALSE(rig.io.drive_status(DriveId::kCentring).lost);
   EXPECT_FALSE(rig.in.drives[index(DriveId::kCentring)].fault);
   EXPECT_TRUE(rig.in.drives[index(DriveId::kCentring)].ready);
@@ -377,6 +394,60 @@ TEST(CanopenIo, LostDriveFaultsWithinItsTimeoutAndRecovers) {
   EXPECT_NE(std::find(kinds.begin(), kinds.end(), CanopenEventKind::kHeartbeatLost), kinds.end());
   EXPECT_NE(std::find(kinds.begin(), kinds.end(), CanopenEventKind::kHeartbeatRecovered),
             kinds.end());
+}
+
+// The controller dies (or its scan hangs) with the belts running: nothing more comes from the
+// master, not even its heartbeat. Every device was told at start-up to watch that heartbeat,
+// so each stops on its own within the consumer time: drives quick-stop, modules switch their
+// outputs off and close the hopper gate. Without this a dead controller left the belts at the
+// last command (the drives' RPDOs simply stop changing).
+TEST(CanopenIo, DevicesStopOnTheirOwnWhenTheControllerDies) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  const std::uint32_t consumer =
+      (std::uint32_t{rig.config.master.node_id} << 16U) | rig.config.master.heartbeat_timeout_ms;
+  for (const auto* drive : rig.drives) {
+    EXPECT_EQ(drive->value(0x1016, 1), consumer);
+    EXPECT_EQ(drive->value(0x6007, 0), 3U);  // quick stop
+  }
+  for (const auto* module : rig.modules) {
+    EXPECT_EQ(module->value(0x1016, 1), consumer);
+    EXPECT_EQ(module->value(0x6206, 1), 0xFFU);  // every digital output takes its error value
+    EXPECT_EQ(module->value(0x6443, 1), 1U);     // analogue outputs too
+  }
+  OutputImage out = all_drives(true, 0.5F);
+  out.flip_plate1_flip = true;
+  out.squeeze_roller_down = true;
+  out.hopper_opening_mm = 80.0F;
+  for (int i = 0; i < 20; ++i) rig.scan(out);
+  for (const auto* drive : rig.drives) {
+    ASSERT_EQ(drive->state().state, cia402::State::kOperationEnabled);
+  }
+  ASSERT_NE(rig.module(IoModuleId::kStations).state().digital_outputs, 0U);
+  ASSERT_NE(rig.module(IoModuleId::kInfeed).state().analog_outputs[0], 0);
+
+  // The last scan's write was the master's last frame. Its heartbeat goes out every second scan
+  // (20 ms period, 10 ms scans), so the last one left 0 or 10 ms before: each device's 150 ms
+  // run out 140 to 150 ms from now.
+  const std::int64_t died_ns = rig.now_ns - LoopbackRig::kCycleNs;  // the last write's time
+  const auto any_drive_stopped = [&rig] {
+    return std::any_of(rig.drives.begin(), rig.drives.end(), [](const auto* drive) {
+      return drive->state().state != cia402::State::kOperationEnabled;
+    });
+  };
+  rig.advance(died_ns + 139'000'000 - rig.now_ns);
+  EXPECT_FALSE(any_drive_stopped()) << "a device stopped before its consumer time ran out";
+  rig.advance(died_ns + 151'000'000 - rig.now_ns);
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    EXPECT_EQ(rig.drives[d]->state().state, cia402::State::kQuickStopActive) << "drive " << d;
+    EXPECT_EQ(rig.drives[d]->counters().heartbeats_lost, 1U);
+    EXPECT_EQ(rig.drives[d]->nmt_state(), canopen::NmtState::kPreOperational);
+  }
+  for (const auto* module : rig.modules) {
+    EXPECT_EQ(module->state().digital_outputs, 0U);  // plates back, roller up, lamps off
+    EXPECT_EQ(module->state().analog_outputs, (std::array<std::int16_t, 3>{}));  // gate closed
+    EXPECT_EQ(module->nmt_state(), canopen::NmtState::kPreOperational);
+  }
 }
 
 TEST(CanopenIo, LostSafetyModuleOpensTheEstopChain) {

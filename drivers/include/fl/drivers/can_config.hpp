@@ -58,6 +58,15 @@ struct IoModuleConfig {
   std::uint16_t heartbeat_timeout_ms = 0;
 };
 
+// The controller's own node: it produces a heartbeat that every device consumes (0x1016:01),
+// so that a controller that dies or hangs stops the devices by their own safe reactions (a
+// drive's quick stop, a module's outputs off) instead of leaving the belts at the last command.
+struct MasterConfig {
+  canopen::NodeId node_id = 0;
+  std::uint16_t heartbeat_producer_ms = 0;  // the master's heartbeat period
+  std::uint16_t heartbeat_timeout_ms = 0;   // each device's consumer time for it
+};
+
 // Analogue channel scaling: engineering unit per count of the 16-bit value.
 struct IoScaling {
   float level_mm_per_count = 0.0F;
@@ -121,6 +130,7 @@ struct CanConfig {
   std::uint16_t boot_timeout_ms = 0;    // NMT reset to every boot-up message
   std::uint16_t enable_timeout_ms = 0;  // CiA 402 enable sequence at start-up
   float max_bus_load = 0.0F;            // share of the bitrate the cyclic traffic may use
+  MasterConfig master;
   std::array<DriveNodeConfig, kDriveCount> drives{};
   std::array<IoModuleConfig, kIoModuleCount> io_modules{};
   IoScaling io_scaling;

@@ -1,7 +1,11 @@
 // Emulated CANopen devices for the twin side: a CiA 402 drive (profile velocity mode) and
 // a CiA 401 I/O module, each answering NMT, expedited SDO (and segmented upload of 0x1008),
 // SYNC-triggered TPDOs and RPDOs by their configured mapping, producing heartbeats, and
-// sending EMCY on an injected fault. State lives in small public structs; a drive's motion
+// sending EMCY on an injected fault. Each watches the master's heartbeat when 0x1016:01 names
+// it (CiA 301 7.2.8.3.2.2): silent longer than the consumer time, the device sends EMCY 0x8130,
+// leaves operational as 0x1029:01 says and takes its application's safe reaction (a drive's
+// abort connection option 0x6007, a module's output error values), as real devices do when the
+// controller dies. State lives in small public structs; a drive's motion
 // comes from a plant callback (the lead connects the fast plant) or a built-in ramp.
 //
 // EmulatedBusNodes owns the devices on one CanBus endpoint and steps them: call poll(now)
@@ -61,7 +65,8 @@ class EmulatedNode {
     std::uint64_t tpdos = 0;
     std::uint64_t sdo_requests = 0;
     std::uint64_t sdo_aborts_sent = 0;
-    std::uint64_t refused_rpdos = 0;  // wrong length for the mapping
+    std::uint64_t refused_rpdos = 0;    // wrong length for the mapping
+    std::uint64_t heartbeats_lost = 0;  // the consumed heartbeat's timeouts
   };
   [[nodiscard]] const Counters& counters() const { return counters_; }
 
@@ -75,6 +80,8 @@ class EmulatedNode {
   virtual void on_sync(CanBus& /*bus*/, std::int64_t /*now_ns*/) {}
   // Application objects back to defaults (reset node).
   virtual void reset_application() {}
+  // Device application: the consumed heartbeat (the master's) fell silent.
+  virtual void on_heartbeat_lost() {}
   // Sends an EMCY frame from the application while not silent (e.g. a pending fault).
   [[nodiscard]] bool silent() const { return silent_; }
 
@@ -85,6 +92,7 @@ class EmulatedNode {
   void handle_rpdo(std::size_t pdo, const CanFrame& frame);
   void apply_rpdo(std::size_t pdo);
   void send_tpdos(CanBus& bus);
+  void heartbeat_lost(CanBus& bus);
   [[nodiscard]] canopen::PdoMapping mapping(std::uint16_t mapping_index) const;
 
   canopen::NodeId node_;
@@ -95,6 +103,10 @@ class EmulatedNode {
   bool boot_pending_ = true;
   bool silent_ = false;
   std::int64_t last_heartbeat_ns_ = 0;
+  // Heartbeat consumer (0x1016:01): armed by the first heartbeat after it was configured.
+  bool consumer_armed_ = false;
+  std::int64_t last_consumed_heartbeat_ns_ = 0;
+  bool heartbeat_error_ = false;  // EMCY 0x8130 sent, not yet reset
   std::array<std::uint32_t, 4> sync_counters_{};
   // Synchronous RPDO data waits for the next SYNC (CiA 301, 7.2.2.2).
   std::array<CanFrame, 4> pending_rpdo_{};
@@ -110,13 +122,14 @@ class EmulatedNode {
 // The drive's process data, for the plant and for tests.
 struct DriveState {
   cia402::State state = cia402::State::kSwitchOnDisabled;
-  std::int8_t mode = 0;              // 0x6060 as written
-  std::int32_t target_velocity = 0;  // 0x60FF, as applied at the last SYNC
-  std::int32_t velocity_actual = 0;  // 0x606C
-  std::int64_t position_actual = 0;  // 0x6064 (sent modulo 2^32)
-  std::uint32_t acceleration = 1;    // 0x6083, velocity units per s
-  std::uint32_t deceleration = 1;    // 0x6084
-  std::uint16_t error_code = 0;      // 0x603F
+  std::int8_t mode = 0;                       // 0x6060 as written
+  std::int32_t target_velocity = 0;           // 0x60FF, as applied at the last SYNC
+  std::int32_t velocity_actual = 0;           // 0x606C
+  std::int64_t position_actual = 0;           // 0x6064 (sent modulo 2^32)
+  std::uint32_t acceleration = 1;             // 0x6083, velocity units per s
+  std::uint32_t deceleration = 1;             // 0x6084
+  std::uint32_t quick_stop_deceleration = 1;  // 0x6085
+  std::uint16_t error_code = 0;               // 0x603F
 };
 
 class EmulatedCia402Drive final : public EmulatedNode {
@@ -137,6 +150,7 @@ class EmulatedCia402Drive final : public EmulatedNode {
   void on_write(std::uint16_t index, std::uint8_t subindex) override;
   void on_sync(CanBus& bus, std::int64_t now_ns) override;
   void reset_application() override;
+  void on_heartbeat_lost() override;
 
  private:
   void publish();
@@ -167,6 +181,7 @@ class EmulatedCia401Io final : public EmulatedNode {
   void on_write(std::uint16_t index, std::uint8_t subindex) override;
   void on_sync(CanBus& bus, std::int64_t now_ns) override;
   void reset_application() override;
+  void on_heartbeat_lost() override;
 
  private:
   IoState state_;

@@ -74,6 +74,8 @@ struct CanopenCounters {
   std::uint64_t events_dropped = 0;    // event ring full: the consumer is too slow
   std::uint64_t send_failures = 0;     // RPDO or SYNC not queued
   std::uint64_t syncs_sent = 0;
+  std::uint64_t heartbeats_sent = 0;  // the master's own
+  std::uint64_t nodes_restarted = 0;  // NMT start sent to a node that fell to pre-operational
   std::uint64_t heartbeats_lost = 0;  // nodes that passed their heartbeat timeout (each time)
 };
 
@@ -181,6 +183,10 @@ class CanopenIo final : public ProcessIo {
     bool heard = false;
     bool lost = false;
     bool rebooted = false;
+    // It reported pre-operational on its own (a device that lost the master's heartbeat, or
+    // another communication error): the next write() sends it NMT start (CiA 302's restart of
+    // a node after an error control event). Its configuration is kept in pre-operational.
+    bool start_wanted = false;
     canopen::NmtState nmt = canopen::NmtState::kBootUp;
     std::uint16_t emcy_code = 0;
   };
@@ -243,6 +249,8 @@ class CanopenIo final : public ProcessIo {
                   std::uint32_t code, std::uint8_t detail = 0);
   [[nodiscard]] bool node_healthy(std::size_t slot) const;
   [[nodiscard]] NodeStatus status_of(std::size_t slot) const;
+  // 0x1016:01 for every device: the master's node id and the consumer time.
+  [[nodiscard]] std::uint32_t master_heartbeat_consumer() const;
   bool configure_drive(SdoClient& sdo, std::size_t drive, std::vector<std::string>& problems);
   bool configure_io(SdoClient& sdo, std::size_t module, std::vector<std::string>& problems);
   bool check_pdo_mapping(SdoClient& sdo, canopen::NodeId node, std::uint16_t mapping_index,
@@ -270,6 +278,9 @@ class CanopenIo final : public ProcessIo {
   std::int64_t now_ns_ = 0;
   bool fault_reset_pressed_ = false;
   bool reset_phase_ = false;
+  // Scans since the master's last heartbeat: it goes out every heartbeat_every_ scans.
+  std::uint32_t scans_since_heartbeat_ = 0;
+  std::uint32_t heartbeat_every_ = 1;
   bool nmt_commanded_ = false;  // start-up running, or the nodes stopped by shut_down()
   CanErrorState bus_state_ = CanErrorState::kErrorActive;
   CanopenCounters counters_;

@@ -54,6 +54,8 @@ class LineDevices {
 
   EmulatedCia402Drive& drive(DriveId id) { return *drives_[index(id)]; }
   EmulatedCia401Io& module(IoModuleId id) { return *modules_[index(id)]; }
+  [[nodiscard]] const EmulatedCia402Drive& drive(DriveId id) const { return *drives_[index(id)]; }
+  [[nodiscard]] const EmulatedCia401Io& module(IoModuleId id) const { return *modules_[index(id)]; }
 
  private:
   CanConfig config_;
