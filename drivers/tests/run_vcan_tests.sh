@@ -11,6 +11,9 @@
 #   FL_VCAN_WORK=dir   scratch dir for the kernel cache and the initramfs
 #                      (default: build/h-drivers/drivers/vcan_work; never inside ../shared,
 #                      which is read-only in CI)
+#   FL_REQUIRE_VCAN=1  a missing qemu, busybox-static, recipe or candump fails (exit 1) instead
+#                      of skipping: scripts/test.sh sets it, so CI cannot pass without the
+#                      real kernel stack and its independent peer
 # Exit 0: passed; 77: skipped (qemu-system-x86 or busybox-static not installed); else failed.
 set -euo pipefail
 HERE="$(cd "$(dirname "$0")" && pwd)"
@@ -18,13 +21,23 @@ ROOT="$(cd "$HERE/../.." && pwd)"
 RECIPE="$ROOT/../shared/recipes/can_vm/run.sh"
 BINARY="${1:-$ROOT/build/h-drivers/drivers/drivers_vcan_tests}"
 
-if ! command -v qemu-system-x86_64 >/dev/null || ! dpkg -s busybox-static >/dev/null 2>&1; then
-  echo "SKIP: the vcan tests need qemu-system-x86 and busybox-static (apt-get install them)"
+# Without the real stack the tests cannot run: skipped for a developer, failed where required.
+missing() {
+  if [ "${FL_REQUIRE_VCAN:-0}" = 1 ]; then
+    echo "FAIL (FL_REQUIRE_VCAN=1): $1"
+    exit 1
+  fi
+  echo "SKIP: $1"
   exit 77
+}
+if ! command -v qemu-system-x86_64 >/dev/null || ! dpkg -s busybox-static >/dev/null 2>&1; then
+  missing "the vcan tests need qemu-system-x86 and busybox-static (apt-get install them)"
 fi
 if [ ! -x "$RECIPE" ] && [ ! -f "$RECIPE" ]; then
-  echo "SKIP: recipe $RECIPE not found"
-  exit 77
+  missing "recipe $RECIPE not found"
+fi
+if ! command -v candump >/dev/null; then
+  [ "${FL_REQUIRE_VCAN:-0}" = 1 ] && missing "candump (can-utils) not installed: no independent peer"
 fi
 if [ ! -x "$BINARY" ]; then
   echo "building $BINARY"
