@@ -104,10 +104,26 @@ SocketCanBus::~SocketCanBus() {
   }
 }
 
+bool SocketCanBus::interface_running() const {
+  ifreq request{};
+  std::memcpy(request.ifr_name, interface_name_.c_str(), interface_name_.size() + 1);
+  return ::ioctl(socket_fd_, SIOCGIFFLAGS, &request) == 0 && (request.ifr_flags & IFF_UP) != 0 &&
+         (request.ifr_flags & IFF_RUNNING) != 0;
+}
+
 bool SocketCanBus::send(const CanFrame& frame) {
   if (error_state_ == CanErrorState::kBusOff) {
-    ++counters_.tx_errors;  // the controller is off the bus until the kernel restarts it
-    return false;
+    // Off the bus until the kernel restarts the controller; should its restart frame have been
+    // lost, the carrier tells.
+    const std::int64_t now = clock_ns(CLOCK_MONOTONIC);
+    const bool probe_due = now >= bus_off_probe_ns_;
+    if (!probe_due || !interface_running()) {
+      if (probe_due) bus_off_probe_ns_ = now + kBusOffProbeNs;
+      ++counters_.tx_errors;
+      return false;
+    }
+    error_state_ = CanErrorState::kErrorActive;
+    ++counters_.restarts_inferred;
   }
   if (frame.dlc > kCanMaxDataBytes || frame.error) {
     ++counters_.malformed_frames;
@@ -245,6 +261,9 @@ void SocketCanBus::apply_error_frame(std::uint32_t class_bits,
   const CanErrorState next = next_error_state(error_state_, class_bits, data);
   if (next == CanErrorState::kBusOff && error_state_ != CanErrorState::kBusOff) {
     ++counters_.bus_off_events;
+    // The carrier is asked only after a restart was due: can-dev may report bus off before it
+    // drops the carrier.
+    bus_off_probe_ns_ = clock_ns(CLOCK_MONOTONIC) + kBusOffProbeNs;
   }
   if ((class_bits & CAN_ERR_RESTARTED) != 0U) {
     ++counters_.restarts;

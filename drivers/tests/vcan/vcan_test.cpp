@@ -6,10 +6,14 @@
 // docs/benchmarks.md.
 #include <fcntl.h>
 #include <gtest/gtest.h>
+#include <linux/can.h>
+#include <linux/can/error.h>
 #include <net/if.h>
 #include <poll.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/ioctl.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
@@ -57,6 +61,9 @@ CanConfig embedded_config() {
   // in can.yaml's 100 ms, which is meant for real drives. Timeouts are unit-tested on a
   // simulated clock; here the SDO exchange itself is under test.
   config.sdo_timeout_ms = 1000;
+  // Likewise the devices' watch of the master's heartbeat: four times can.yaml's 150 ms, as
+  // the two-process smoke test stretches it, so that a stalled guest stops no device.
+  config.master.heartbeat_timeout_ms = 600;
   return config;
 }
 
@@ -138,6 +145,76 @@ TEST_F(Vcan, TransportSendsReceivesWithKernelTimestampsAndFilters) {
   EXPECT_LT(received[0].timestamp_ns - sent_at, 100'000'000);
   EXPECT_EQ(receiver.counters().frames_received, 1U);
   EXPECT_EQ(receiver.error_state(), CanErrorState::kErrorActive);  // vcan has no controller
+}
+
+// Plays a CAN controller's driver: writes error frames onto vcan0 from its own raw socket, as
+// can-dev delivers them on a real controller (vcan has no controller to make them). Test-only
+// socket code, beside the transport it checks.
+class ErrorFrameSource {
+ public:
+  ErrorFrameSource() : fd_(::socket(PF_CAN, SOCK_RAW, CAN_RAW)) {
+    ifreq request{};
+    std::snprintf(request.ifr_name, sizeof request.ifr_name, "%s", kInterface);
+    sockaddr_can address{};
+    address.can_family = AF_CAN;
+    if (fd_ >= 0 && ::ioctl(fd_, SIOCGIFINDEX, &request) == 0) {
+      address.can_ifindex = request.ifr_ifindex;
+      bound_ = ::bind(fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) == 0;
+    }
+  }
+  ~ErrorFrameSource() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  ErrorFrameSource(const ErrorFrameSource&) = delete;
+  ErrorFrameSource& operator=(const ErrorFrameSource&) = delete;
+  [[nodiscard]] bool ready() const { return bound_; }
+  bool send(canid_t error_class) {
+    can_frame frame{};
+    frame.can_id = CAN_ERR_FLAG | error_class;
+    frame.len = CAN_ERR_DLC;
+    return ::write(fd_, &frame, sizeof frame) == static_cast<ssize_t>(sizeof frame);
+  }
+
+ private:
+  int fd_;
+  bool bound_ = false;
+};
+
+// Bus off through the kernel: the error frame reaches the transport through the real socket
+// (CAN_RAW_ERR_FILTER), it refuses to send while off, and comes back with the driver's restart
+// frame. When that frame is lost, the interface's carrier brings it back at the next probe
+// instead of never (the interface runs: vcan keeps its carrier).
+TEST_F(Vcan, BusOffStopsSendingUntilTheRestartOrTheCarrierReturns) {
+  ErrorFrameSource driver;
+  ASSERT_TRUE(driver.ready());
+  SocketCanBus bus(SocketCanOptions{kInterface, {}, true, false, 0});
+  std::array<CanFrame, 8> frames{};
+  const auto receive_until = [&](CanErrorState wanted) {
+    for (int i = 0; i < 1000 && bus.error_state() != wanted; ++i) {
+      (void)bus.receive(frames);
+      usleep(100);
+    }
+    return bus.error_state() == wanted;
+  };
+  ASSERT_TRUE(driver.send(CAN_ERR_BUSOFF));
+  ASSERT_TRUE(receive_until(CanErrorState::kBusOff));
+  EXPECT_EQ(bus.counters().bus_off_events, 1U);
+  EXPECT_FALSE(bus.send(make_frame(0x123, 1)));  // off the bus: refused, not queued
+  ASSERT_TRUE(driver.send(CAN_ERR_RESTARTED));
+  ASSERT_TRUE(receive_until(CanErrorState::kErrorActive));
+  EXPECT_EQ(bus.counters().restarts, 1U);
+  EXPECT_TRUE(bus.send(make_frame(0x123, 1)));
+
+  // Bus off again, and the restart frame never comes.
+  ASSERT_TRUE(driver.send(CAN_ERR_BUSOFF));
+  ASSERT_TRUE(receive_until(CanErrorState::kBusOff));
+  const std::int64_t off_at = now_ns();
+  EXPECT_FALSE(bus.send(make_frame(0x123, 1)));  // before the first probe is due
+  while (!bus.send(make_frame(0x123, 1)) && now_ns() - off_at < 2'000'000'000) usleep(1000);
+  EXPECT_EQ(bus.error_state(), CanErrorState::kErrorActive);
+  EXPECT_EQ(bus.counters().restarts_inferred, 1U);
+  // The probe waits a restart's time (kBusOffProbeNs) before it trusts the carrier.
+  EXPECT_GE(now_ns() - off_at, SocketCanBus::kBusOffProbeNs - 5'000'000);
 }
 
 TEST_F(Vcan, SendConfirmationsCarryTheKernelStampOfEachOwnFrame) {

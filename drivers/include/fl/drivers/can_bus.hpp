@@ -20,13 +20,16 @@ const char* to_string(CanErrorState state);
 struct CanBusCounters {
   std::uint64_t frames_sent = 0;
   std::uint64_t frames_received = 0;
-  std::uint64_t tx_queue_full = 0;     // send refused because the TX queue is full (ENOBUFS)
-  std::uint64_t tx_errors = 0;         // any other send failure
-  std::uint64_t rx_errors = 0;         // receive failures other than "nothing pending"
-  std::uint64_t rx_overruns = 0;       // frames the receiver dropped (kernel or ring full)
-  std::uint64_t error_frames = 0;      // error frames seen
-  std::uint64_t bus_off_events = 0;    // transitions into bus off
-  std::uint64_t restarts = 0;          // controller restarted after bus off (CAN_ERR_RESTARTED)
+  std::uint64_t tx_queue_full = 0;   // send refused because the TX queue is full (ENOBUFS)
+  std::uint64_t tx_errors = 0;       // any other send failure
+  std::uint64_t rx_errors = 0;       // receive failures other than "nothing pending"
+  std::uint64_t rx_overruns = 0;     // frames the receiver dropped (kernel or ring full)
+  std::uint64_t error_frames = 0;    // error frames seen
+  std::uint64_t bus_off_events = 0;  // transitions into bus off
+  std::uint64_t restarts = 0;        // controller restarted after bus off (CAN_ERR_RESTARTED)
+  // Back from bus off without the restart error frame (it was lost): the interface's carrier
+  // was seen up again (SocketCAN only).
+  std::uint64_t restarts_inferred = 0;
   std::uint64_t malformed_frames = 0;  // frames refused by the transport (e.g. DLC > 8)
   // Send confirmations (only where the transport has them switched on):
   std::uint64_t sends_confirmed = 0;        // own frames seen back on the bus, stamped
