@@ -2,7 +2,9 @@
 // (drivers/dds/scripts/make_security.sh): a secured camera node and a secured controller
 // match and exchange estimates; an unsecured participant, and an authenticated participant
 // whose permissions do not cover the estimates topic, get nothing, and the latter cannot
-// publish estimates either. Skipped when openssl or the security plugins are missing.
+// publish estimates either. Writers the controller must refuse although they publish: an
+// unsecured camera node, and a "camera" whose certificate and permissions come from another
+// CA (a second run of the script). Skipped when openssl or the security plugins are missing.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -29,10 +31,19 @@ class DdsSecurity : public ::testing::Test {
                                 (dir_.string() + ".log") + " 2>&1";
     const int raw = std::system(command.c_str());
     status_ = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
+    if (status_ == 0) {
+      // Another CA with the same names: what a forger without the line's CA key can make.
+      const std::string foreign = std::string(FL_DDS_SECURITY_SCRIPT) + " " + foreign_dir() +
+                                  " >> " + (dir_.string() + ".log") + " 2>&1";
+      const int foreign_raw = std::system(foreign.c_str());
+      status_ = WIFEXITED(foreign_raw) ? WEXITSTATUS(foreign_raw) : -1;
+    }
   }
+  static std::string foreign_dir() { return dir_.string() + "_foreign"; }
   static void TearDownTestSuite() {
     std::error_code ignored;
     std::filesystem::remove_all(dir_, ignored);
+    std::filesystem::remove_all(foreign_dir(), ignored);
     std::filesystem::remove(dir_.string() + ".log", ignored);
   }
   void SetUp() override {
@@ -43,6 +54,9 @@ class DdsSecurity : public ::testing::Test {
   }
   static std::string uri(const char* role) {
     return "file://" + (dir_ / ("cyclonedds-" + std::string(role) + ".xml")).string();
+  }
+  static std::string foreign_uri(const char* role) {
+    return "file://" + foreign_dir() + "/cyclonedds-" + std::string(role) + ".xml";
   }
 
   static inline std::filesystem::path dir_;
@@ -92,6 +106,44 @@ TEST_F(DdsSecurity, UnpermittedParticipantCannotReadOrPublishEstimates) {
   // the controller's side would refuse a remote writer the permissions do not name anyway.
   EXPECT_EQ(intruder_writer.wait_exit(20s), 4) << intruder_writer.output();
   EXPECT_EQ(intruder_reader.wait_exit(20s), 4) << intruder_reader.output();
+  EXPECT_EQ(input.counters().samples_taken, 0U);
+  EXPECT_EQ(input.matched_writers(), 0U);
+}
+
+// A camera node without security on the plant network publishes estimates (an unsecured
+// listener receives them, which shows the writer is live: it waits for a reader before it
+// publishes), and the secured controller neither matches it nor takes a sample.
+TEST_F(DdsSecurity, UnsecuredCameraNodeIsRefusedByTheSecuredController) {
+  Domain domain(34, uri("controller"));
+  Participant controller(domain.id());
+  DdsCameraInput input(controller);
+  const std::string unsecured =
+      std::string("file://") + FL_DDS_CONFIG_DIR + "/cyclonedds-loopback.xml";
+  PeerProcess listener({"subscribe", "34", "6"}, unsecured);
+  PeerProcess rogue_camera({"publish", "34", "0", "20", "100", "exit"}, unsecured);
+  EXPECT_EQ(rogue_camera.wait_exit(20s), 0) << rogue_camera.output();  // it found a reader
+  ASSERT_EQ(listener.wait_exit(20s), 0) << listener.output();
+  EXPECT_EQ(listener.output().rfind("accepted=0", 0), std::string::npos)
+      << "the unsecured listener got nothing, so the test shows nothing: " << listener.output();
+  EXPECT_EQ(input.counters().samples_taken, 0U);
+  EXPECT_EQ(input.matched_writers(), 0U);
+}
+
+// A forged camera: certificate, governance and permissions with the line's names, signed by
+// another CA. Authentication fails, so the secured controller never matches it; the forger's
+// own controller (same foreign CA) does receive its estimates, which shows the forged set is
+// well made and refused only for its CA. (With the line's own camera identity in its place the
+// controller takes all 100 estimates: checked by hand, 2026-12-05.)
+TEST_F(DdsSecurity, CameraOfAForeignCaIsRefused) {
+  Domain domain(35, uri("controller"));
+  Participant controller(domain.id());
+  DdsCameraInput input(controller);
+  PeerProcess forged_listener({"subscribe", "35", "8"}, foreign_uri("controller"));
+  PeerProcess forged_camera({"publish", "35", "0", "20", "100", "exit"}, foreign_uri("camera"));
+  EXPECT_EQ(forged_camera.wait_exit(30s), 0) << forged_camera.output();
+  ASSERT_EQ(forged_listener.wait_exit(30s), 0) << forged_listener.output();
+  EXPECT_EQ(forged_listener.output().rfind("accepted=0", 0), std::string::npos)
+      << forged_listener.output();
   EXPECT_EQ(input.counters().samples_taken, 0U);
   EXPECT_EQ(input.matched_writers(), 0U);
 }
