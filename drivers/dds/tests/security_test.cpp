@@ -27,8 +27,8 @@ class DdsSecurity : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = std::filesystem::temp_directory_path() / ("fl_dds_security_" + std::to_string(getpid()));
-    const std::string command = std::string(FL_DDS_SECURITY_SCRIPT) + " " + dir_.string() + " > " +
-                                (dir_.string() + ".log") + " 2>&1";
+    const std::string command = std::string(FL_DDS_SECURITY_SCRIPT) + " " + dir_.string() +
+                                " --test-intruder > " + (dir_.string() + ".log") + " 2>&1";
     const int raw = std::system(command.c_str());
     status_ = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
     if (status_ == 0) {
