@@ -27,6 +27,18 @@ constexpr std::uint32_t kDeviceProfileMask = 0xFFFF;  // 0x1000 low word: the Ci
 constexpr std::uint32_t kDriveProfile = 402;
 constexpr std::uint32_t kIoProfile = 401;
 
+// One expedited SDO write of the start-up configuration; a failure goes into `problems`
+// naming the device and the object.
+bool write_object(SdoClient& sdo, NodeId id, const std::string& who, SdoAddress address,
+                  std::uint32_t value, std::uint8_t size, std::vector<std::string>& problems) {
+  const SdoResult result = sdo.download(id, address, value, size);
+  if (!result.ok()) {
+    problems.push_back(who + ": SDO write " + hex_text(address.index, 4) + ":" +
+                       hex_text(address.subindex, 2) + " failed: " + result.describe());
+  }
+  return result.ok();
+}
+
 }  // namespace
 
 const char* to_string(CanopenEventKind kind) {
@@ -802,12 +814,7 @@ bool CanopenIo::configure_drive(SdoClient& sdo, std::size_t d, std::vector<std::
     return false;
   }
   const auto write = [&](SdoAddress address, std::uint32_t value, std::uint8_t size) {
-    const SdoResult result = sdo.download(id, address, value, size);
-    if (!result.ok()) {
-      problems.push_back(who + ": SDO write " + hex_text(address.index, 4) + ":" +
-                         hex_text(address.subindex, 2) + " failed: " + result.describe());
-    }
-    return result.ok();
+    return write_object(sdo, id, who, address, value, size, problems);
   };
   const std::uint32_t max_accel =
       acceleration_to_drive_units(static_cast<DriveId>(d), node.max_accel_mps2);
@@ -863,12 +870,7 @@ bool CanopenIo::configure_io(SdoClient& sdo, std::size_t m, std::vector<std::str
     return false;
   }
   const auto write = [&](SdoAddress address, std::uint32_t value, std::uint8_t size) {
-    const SdoResult result = sdo.download(id, address, value, size);
-    if (!result.ok()) {
-      problems.push_back(who + ": SDO write " + hex_text(address.index, 4) + ":" +
-                         hex_text(address.subindex, 2) + " failed: " + result.describe());
-    }
-    return result.ok();
+    return write_object(sdo, id, who, address, value, size, problems);
   };
   // Watch the master's heartbeat; when it falls silent every digital output goes off (flip
   // plates back, roller up, lamps off) and every analogue output to 0 (hopper gate closed,
