@@ -228,12 +228,43 @@ DemPlant::DemPlant(const LineConfig& line, const DemPlantConfig& config)
     template_bonds_.push_back(std::move(bonds));
   }
   model_ = build_model();
+  check_timestep();
   exits_.resize(std::max<std::size_t>(config_.simulation.exit_capacity, 1));
   InputImage scratch{};
   reset(0, scratch);
 }
 
 DemPlant::~DemPlant() = default;
+
+void DemPlant::check_timestep() const {
+  // The line starts empty, so the engine's check runs on a probe holding one fillet of each
+  // variant, apart and at rest: the bonds and contacts the run will have. A timestep the
+  // stiffnesses cannot carry (dem.yaml's bonds made much stiffer, a larger Rayleigh fraction)
+  // would run, and give numbers, unstable: refused here, naming the numbers.
+  dem::Simulation probe(model_);
+  const Vec3 lower = model_->spec().domain.lower_m;
+  for (std::size_t v = 0; v < templates_.size(); ++v) {
+    const dem::FilletTemplate& t = templates_[v];
+    dem::BodyPose pose;
+    pose.position_m = lower + Vec3(0.3 * static_cast<double>(v + 1), 0.3, 0.3);
+    (void)probe.add_body(t.positions_m, t.radii_m, t.types, template_bonds_[v], pose);
+  }
+  const dem::TimestepReport report = probe.check_timestep();
+  // Refused where the run would be unstable, with a factor of 2 to spare (explicit integration
+  // diverges from dt = 2/omega on), or beyond EDEM's 40 % of the Rayleigh time. Between a fifth
+  // and half of 2/omega the run is stable, its oscillations less accurate than the engine's
+  // check asks: a coarse, fast line is the engineer's choice, so it runs.
+  const double critical_s = std::min(report.bond_critical_step_s, report.contact_critical_step_s);
+  const bool unstable = report.timestep_s > 0.5 * critical_s;
+  if (unstable || report.rayleigh_fraction > 0.4) {
+    throw std::invalid_argument(
+        std::string("dem plant: ") +
+        (unstable ? "the timestep is over half the critical step 2/omega, unstable: " : "") +
+        report.message +
+        " (lower simulation.rayleigh_fraction in the plant config, or the stiffnesses in the "
+        "engine config)");
+  }
+}
 
 double DemPlant::engine_timestep_s() const { return model_->spec().timestep_s; }
 

@@ -107,3 +107,49 @@ TEST(DemPlantBelt, ReversalDropsOnlyTheFilletOnTheRejectBelt) {
 
 }  // namespace
 }  // namespace fl::test
+
+namespace fl::test {
+namespace {
+
+std::string construction_error(const DemPlantConfig& config) {
+  try {
+    const DemPlant plant(default_line_config(), config);
+  } catch (const std::invalid_argument& error) {
+    return error.what();
+  }
+  return "";
+}
+
+// The line starts empty, so nothing in a run would show that the engine's timestep is too long
+// for the model until it blew up: the plant checks it on a probe fillet of each variant when it
+// is built, and refuses with the numbers. The shipped configuration passes (every other test).
+TEST(DemPlantTimestep, ATimestepTheModelCannotCarryIsRefusedWithItsNumbers) {
+  DemPlantConfig long_step = test_config();
+  long_step.simulation.rayleigh_fraction = 0.5;  // EDEM's advice ends at 40 %
+  const std::string rayleigh = construction_error(long_step);
+  EXPECT_NE(rayleigh.find("above 40% of the Rayleigh time"), std::string::npos) << rayleigh;
+  EXPECT_NE(rayleigh.find("rayleigh_fraction"), std::string::npos) << rayleigh;
+
+  // Bonds 400 times appendix B's stiffness: a sub-particle held by its bonds oscillates 20
+  // times faster, and 15 % of the Rayleigh time is then 2.4 times 2/omega (measured:
+  // 0.29 ms against 0.12 ms at 7 mm spheres), where the integration diverges.
+  const auto with_bonds_stiffer = [](double factor) {
+    DemPlantConfig config = test_config();
+    for (dem::InteractionSpec& interaction : config.engine.interactions) {
+      if (!interaction.bond_law) continue;
+      for (const char* key : {"normal_stiffness_n_per_m3", "shear_stiffness_n_per_m3"}) {
+        interaction.bond_law->parameters.at(key) *= factor;
+      }
+    }
+    return config;
+  };
+  const std::string bonds = construction_error(with_bonds_stiffer(400.0));
+  EXPECT_NE(bonds.find("unstable"), std::string::npos) << bonds;
+  EXPECT_NE(bonds.find("TOO LARGE for the bonds"), std::string::npos) << bonds;
+  // Four times stiffer: 0.29 ms is 0.24 of 2/omega, stable but over the engine's accuracy
+  // fifth; a coarse line is allowed to run.
+  EXPECT_EQ(construction_error(with_bonds_stiffer(4.0)), "");
+}
+
+}  // namespace
+}  // namespace fl::test

@@ -233,6 +233,8 @@ class DemPlant final : public Plant {
   std::uint32_t add_fillet(std::uint8_t variant, SideUp side, const Eigen::Vector3d& centroid_m,
                            double angle_rad, double v_mps, std::uint32_t group_id);
   std::shared_ptr<const dem::Model> build_model() const;
+  // Throws std::invalid_argument when the timestep is too large for the model's stiffnesses.
+  void check_timestep() const;
   // The flip plates' section and the levels of the product path (engine metres).
   struct PlateLayout {
     double start_m = 0.0;       // the guide's raised end, top_z_m high: plate 1's top edge
