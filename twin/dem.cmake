@@ -10,8 +10,9 @@ add_library(
   ${FL_TWIN_DEM_DIR}/simulation.cpp ${FL_TWIN_DEM_DIR}/config.cpp
   ${FL_TWIN_DEM_DIR}/vtk_writer.cpp)
 target_include_directories(fl_twin_dem PUBLIC ${CMAKE_CURRENT_LIST_DIR}/include)
+# fl_twin_fillet: the STL reader, for mesh walls named in the config.
 target_link_libraries(fl_twin_dem PUBLIC Eigen3::Eigen OpenMP::OpenMP_CXX fl_controller_config
-                                  PRIVATE fl_build_flags)
+                                  PRIVATE fl_build_flags fl_twin_fillet)
 # The engine never reads errno: without this GCC guards every sqrt in the pair and bond loops
 # with a branch to the library call that would set it.
 target_compile_options(fl_twin_dem PRIVATE -fno-math-errno)

@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "fl/controller/yaml_reader.hpp"
+#include "fl/twin/dem/stl.hpp"
 
 namespace fl::dem {
 namespace {
@@ -21,6 +22,12 @@ Vec3 read_vec3(YamlMapReader& map, std::string_view key, const Vec3& fallback) {
   if (!map.has(key)) return fallback;
   const std::vector<double> values = map.read_doubles(key, Range::any(), 3);
   return values.size() == 3 ? Vec3(values[0], values[1], values[2]) : fallback;
+}
+
+// A required 3-vector: a box without a corner is a problem, not a box at the origin.
+Vec3 read_required_vec3(YamlMapReader& map, std::string_view key) {
+  const std::vector<double> values = map.read_doubles(key, Range::any(), 3);
+  return values.size() == 3 ? Vec3(values[0], values[1], values[2]) : Vec3::Zero();
 }
 
 LawParameters read_law_parameters(YamlMapReader& map, const std::vector<LawParameterInfo>& info) {
@@ -143,6 +150,48 @@ ModelSpec load_model_spec(const std::filesystem::path& yaml_file, const LawRegis
       interaction.contact_between_bonded = m.read_bool_or("contact_between_bonded", false);
       spec.interactions.push_back(interaction);
     });
+    // Walls from the file: boxes, and triangle meshes from STL files (paths relative to this
+    // file; the STL's unit times `scale` is metres, then moved by `offset_m`).
+    if (root.has("boxes")) {
+      root.for_each_map("boxes", [&](YamlMapReader& m, std::size_t) {
+        const std::string name = m.read_string("name");
+        const std::uint32_t type = type_index(m, "type");
+        const Vec3 min_m = read_required_vec3(m, "min_m");
+        const Vec3 max_m = read_required_vec3(m, "max_m");
+        if (m.has("min_m") && m.has("max_m") && !(min_m.array() < max_m.array()).all()) {
+          m.report("max_m", ProblemKind::kInconsistent,
+                   "a box needs max_m above min_m on every axis");
+          return;
+        }
+        spec.meshes.push_back(box_mesh_wall(name, type, min_m, max_m));
+      });
+    }
+    if (root.has("meshes")) {
+      root.for_each_map("meshes", [&](YamlMapReader& m, std::size_t) {
+        MeshWallSpec wall;
+        wall.name = m.read_string("name");
+        wall.type = type_index(m, "type");
+        const std::string stl = m.read_string("stl");
+        StlReadOptions options;
+        options.require_closed = false;  // a chute or a guide is an open surface
+        options.scale = m.read_double_or("scale", 1.0, Range::positive());
+        const Vec3 offset_m = read_vec3(m, "offset_m", Vec3::Zero());
+        if (stl.empty()) return;  // reported by read_string
+        const std::filesystem::path file = yaml_file.parent_path() / stl;
+        try {
+          const StlReadResult read = read_stl(file, options);
+          for (const IndexedTriangle& t : read.mesh.triangles) {
+            wall.triangles.push_back(
+                {{read.mesh.vertices[t[0]] + offset_m, read.mesh.vertices[t[1]] + offset_m,
+                  read.mesh.vertices[t[2]] + offset_m}});
+          }
+        } catch (const StlError& error) {
+          m.report("stl", ProblemKind::kInvalidValue, error.what());
+          return;
+        }
+        spec.meshes.push_back(std::move(wall));
+      });
+    }
     if (root.has("planes")) {
       root.for_each_map("planes", [&](YamlMapReader& m, std::size_t) {
         PlaneWallSpec plane;

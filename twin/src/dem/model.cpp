@@ -1,6 +1,7 @@
 #include "fl/twin/dem/model.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -95,6 +96,26 @@ std::optional<std::uint32_t> Model::find_type(std::string_view name) const {
     }
   }
   return std::nullopt;
+}
+
+MeshWallSpec box_mesh_wall(const std::string& name, std::uint32_t type, const Vec3& min_m,
+                           const Vec3& max_m) {
+  // Corners c[k] with bit 0, 1, 2 of k choosing max in x, y, z.
+  std::array<Vec3, 8> c;
+  for (std::size_t k = 0; k < 8; ++k) {
+    c[k] = Vec3((k & 1U) != 0U ? max_m.x() : min_m.x(), (k & 2U) != 0U ? max_m.y() : min_m.y(),
+                (k & 4U) != 0U ? max_m.z() : min_m.z());
+  }
+  constexpr std::array<std::array<std::size_t, 4>, 6> kFaces = {
+      {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}}};
+  MeshWallSpec wall;
+  wall.name = name;
+  wall.type = type;
+  for (const auto& f : kFaces) {
+    wall.triangles.push_back({{c[f[0]], c[f[1]], c[f[2]]}});
+    wall.triangles.push_back({{c[f[0]], c[f[2]], c[f[3]]}});
+  }
+  return wall;
 }
 
 double rayleigh_time_s(double radius_m, double density_kg_per_m3, double youngs_modulus_pa,

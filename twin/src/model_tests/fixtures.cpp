@@ -329,23 +329,7 @@ double choose_timestep_s(const CommonParams& common, const dem::ModelSpec& spec,
 
 dem::MeshWallSpec box_wall(const std::string& name, std::uint32_t type, const Vec3& min_m,
                            const Vec3& max_m) {
-  // Corners c[k] with bit 0, 1, 2 of k choosing max in x, y, z; two triangles per face,
-  // counter-clockwise seen from outside (the engine treats them two-sided anyway).
-  std::array<Vec3, 8> c;
-  for (std::size_t k = 0; k < 8; ++k) {
-    c[k] = Vec3((k & 1U) != 0U ? max_m.x() : min_m.x(), (k & 2U) != 0U ? max_m.y() : min_m.y(),
-                (k & 4U) != 0U ? max_m.z() : min_m.z());
-  }
-  constexpr std::array<std::array<std::size_t, 4>, 6> kFaces = {
-      {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}}};
-  dem::MeshWallSpec wall;
-  wall.name = name;
-  wall.type = type;
-  for (const auto& f : kFaces) {
-    wall.triangles.push_back({{c[f[0]], c[f[1]], c[f[2]]}});
-    wall.triangles.push_back({{c[f[0]], c[f[2]], c[f[3]]}});
-  }
-  return wall;
+  return dem::box_mesh_wall(name, type, min_m, max_m);
 }
 
 dem::PlaneWallSpec floor_plane(std::uint32_t type) {

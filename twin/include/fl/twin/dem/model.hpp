@@ -58,6 +58,11 @@ struct MeshWallSpec {
   std::vector<Triangle> triangles;  // two-sided
 };
 
+// An axis-aligned box as a closed mesh wall: two triangles a face, counter-clockwise seen from
+// outside (the engine treats them two-sided anyway).
+MeshWallSpec box_mesh_wall(const std::string& name, std::uint32_t type, const Vec3& min_m,
+                           const Vec3& max_m);
+
 struct Domain {  // particles leaving it are kept and clamped into the edge cells
   Vec3 lower_m = Vec3(-0.5, -0.5, -0.1);
   Vec3 upper_m = Vec3(0.5, 0.5, 0.5);
