@@ -18,10 +18,10 @@ BendResult run_bend(const BendParams& params) {
   dem::ModelSpec spec = make_spec(params.common);
   const dem::FilletTemplate fillet = make_fillet(params.common);
   // Table top at z = 0, edge at x = 0, table towards -x.
-  spec.meshes.push_back(
-      box_wall("table", equipment_type(spec),
-               Vec3(-params.table_length_m, -0.5 * params.table_width_m, -params.table_thickness_m),
-               Vec3(0.0, 0.5 * params.table_width_m, 0.0)));
+  spec.meshes.push_back(dem::box_mesh_wall(
+      "table", equipment_type(spec),
+      Vec3(-params.table_length_m, -0.5 * params.table_width_m, -params.table_thickness_m),
+      Vec3(0.0, 0.5 * params.table_width_m, 0.0)));
   const double length = 2.0 * fillet.half_extent_m.x();
   spec.domain.lower_m = Vec3(-params.table_length_m - 0.2, -0.5, -length - 0.2);
   spec.domain.upper_m = Vec3(length + 0.2, 0.5, 0.3);

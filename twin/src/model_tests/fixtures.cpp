@@ -327,11 +327,6 @@ double choose_timestep_s(const CommonParams& common, const dem::ModelSpec& spec,
   return dt;
 }
 
-dem::MeshWallSpec box_wall(const std::string& name, std::uint32_t type, const Vec3& min_m,
-                           const Vec3& max_m) {
-  return dem::box_mesh_wall(name, type, min_m, max_m);
-}
-
 dem::PlaneWallSpec floor_plane(std::uint32_t type) {
   return {"floor", type, Vec3::Zero(), Vec3::UnitZ()};
 }

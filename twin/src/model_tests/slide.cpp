@@ -30,7 +30,7 @@ SlideResult run_slide(const SlideParams& params) {
   }
   const dem::FilletTemplate fillet = make_fillet(common);
   // Plate top at z = 0 through the pivot (origin), long along x; tilting about +y lowers +x.
-  spec.meshes.push_back(box_wall(
+  spec.meshes.push_back(dem::box_mesh_wall(
       "plate", equipment,
       Vec3(-0.5 * params.plate_length_m, -0.5 * params.plate_width_m, -params.plate_thickness_m),
       Vec3(0.5 * params.plate_length_m, 0.5 * params.plate_width_m, 0.0)));

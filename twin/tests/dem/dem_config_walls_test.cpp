@@ -3,6 +3,7 @@
 // file says and carry spheres; a bad box or a missing or broken STL is named with its key.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -69,6 +70,18 @@ boxes:
 meshes:
   - {name: shelf, type: equipment, stl: square.stl, scale: 0.001, offset_m: [0.3, 0.0, 0.1]}
 )";
+
+// A box wall is 12 triangles spanning its corners.
+TEST(DemConfigWalls, BoxWallHasTwelveTriangles) {
+  const auto wall = box_mesh_wall("b", 2, Vec3(-1, -2, -3), Vec3(1, 2, 3));
+  ASSERT_EQ(wall.triangles.size(), 12U);
+  for (const auto& t : wall.triangles) {
+    for (const auto& v : t.vertices_m) {
+      EXPECT_EQ(std::abs(v.x()), 1.0);
+      EXPECT_EQ(std::abs(v.z()), 3.0);
+    }
+  }
+}
 
 TEST(DemConfigWalls, BoxesAndStlMeshesLoadWhereTheFileSays) {
   const ModelSpec spec = load_model_spec(config_with("load", kWalls));

@@ -104,18 +104,6 @@ TEST(ModelTestsFixtures, AViscoelasticArmShortensTheStepInHalvings) {
   }
 }
 
-// A box wall is 12 triangles spanning its corners.
-TEST(ModelTestsFixtures, BoxWallHasTwelveTriangles) {
-  const auto wall = box_wall("b", 2, Vec3(-1, -2, -3), Vec3(1, 2, 3));
-  ASSERT_EQ(wall.triangles.size(), 12U);
-  for (const auto& t : wall.triangles) {
-    for (const auto& v : t.vertices_m) {
-      EXPECT_EQ(std::abs(v.x()), 1.0);
-      EXPECT_EQ(std::abs(v.z()), 3.0);
-    }
-  }
-}
-
 TEST(ModelTestsFixtures, ParallelForRunsEveryItemAndRethrows) {
   std::atomic<int> sum{0};
   parallel_for(100, 3, [&](std::size_t k) { sum += static_cast<int>(k); });

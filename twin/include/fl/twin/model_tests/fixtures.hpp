@@ -101,9 +101,6 @@ double bond_critical_step_s(const dem::ModelSpec& spec, const dem::FilletTemplat
 double choose_timestep_s(const CommonParams& common, const dem::ModelSpec& spec,
                          const dem::FilletTemplate& fillet);
 
-// Closed box wall (12 triangles) between two corners.
-dem::MeshWallSpec box_wall(const std::string& name, std::uint32_t type, const Vec3& min_m,
-                           const Vec3& max_m);
 dem::PlaneWallSpec floor_plane(std::uint32_t type);
 
 // Adds the fillet at `orientation` with its lowest sphere bottom at `bottom_z_m` and its
