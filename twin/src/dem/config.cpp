@@ -18,16 +18,15 @@ std::vector<LawSpec> fillet_chain(double friction_coefficient) {
           {"coulomb", {{"friction_coefficient", friction_coefficient}}}};
 }
 
-Vec3 read_vec3(YamlMapReader& map, std::string_view key, const Vec3& fallback) {
-  if (!map.has(key)) return fallback;
-  const std::vector<double> values = map.read_doubles(key, Range::any(), 3);
-  return values.size() == 3 ? Vec3(values[0], values[1], values[2]) : fallback;
-}
-
-// A required 3-vector: a box without a corner is a problem, not a box at the origin.
+// A required 3-vector: a box without a corner is a problem, not a box at the origin. A wrong
+// one is reported by the reader (and the load throws), so its value here is never used.
 Vec3 read_required_vec3(YamlMapReader& map, std::string_view key) {
   const std::vector<double> values = map.read_doubles(key, Range::any(), 3);
   return values.size() == 3 ? Vec3(values[0], values[1], values[2]) : Vec3::Zero();
+}
+
+Vec3 read_vec3(YamlMapReader& map, std::string_view key, const Vec3& fallback) {
+  return map.has(key) ? read_required_vec3(map, key) : fallback;
 }
 
 LawParameters read_law_parameters(YamlMapReader& map, const std::vector<LawParameterInfo>& info) {
