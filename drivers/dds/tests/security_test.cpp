@@ -110,23 +110,32 @@ TEST_F(DdsSecurity, UnpermittedParticipantCannotReadOrPublishEstimates) {
   EXPECT_EQ(input.matched_writers(), 0U);
 }
 
-// A camera node without security on the plant network publishes estimates (an unsecured
-// listener receives them, which shows the writer is live: it waits for a reader before it
-// publishes), and the secured controller neither matches it nor takes a sample.
-TEST_F(DdsSecurity, UnsecuredCameraNodeIsRefusedByTheSecuredController) {
-  Domain domain(34, uri("controller"));
-  Participant controller(domain.id());
+// A camera writer the secured controller on `domain` must refuse although it publishes: a
+// listener with `listener_uri` receives it (the writer waits for a reader before it publishes,
+// so the listener shows it live), and the controller neither matches it nor takes a sample.
+void expect_publishing_writer_refused(int domain, const std::string& controller_uri,
+                                      const std::string& listener_uri,
+                                      const std::string& writer_uri, int listen_s,
+                                      std::chrono::seconds wait) {
+  Domain secured(domain, controller_uri);
+  Participant controller(secured.id());
   DdsCameraInput input(controller);
-  const std::string unsecured =
-      std::string("file://") + FL_DDS_CONFIG_DIR + "/cyclonedds-loopback.xml";
-  PeerProcess listener({"subscribe", "34", "6"}, unsecured);
-  PeerProcess rogue_camera({"publish", "34", "0", "20", "100", "exit"}, unsecured);
-  EXPECT_EQ(rogue_camera.wait_exit(20s), 0) << rogue_camera.output();  // it found a reader
-  ASSERT_EQ(listener.wait_exit(20s), 0) << listener.output();
+  const std::string id = std::to_string(domain);
+  PeerProcess listener({"subscribe", id, std::to_string(listen_s)}, listener_uri);
+  PeerProcess writer({"publish", id, "0", "20", "100", "exit"}, writer_uri);
+  EXPECT_EQ(writer.wait_exit(wait), 0) << writer.output();  // it found a reader
+  ASSERT_EQ(listener.wait_exit(wait), 0) << listener.output();
   EXPECT_EQ(listener.output().rfind("accepted=0", 0), std::string::npos)
-      << "the unsecured listener got nothing, so the test shows nothing: " << listener.output();
+      << "the listener got nothing, so the test shows nothing: " << listener.output();
   EXPECT_EQ(input.counters().samples_taken, 0U);
   EXPECT_EQ(input.matched_writers(), 0U);
+}
+
+// A camera node without security on the plant network, heard by an unsecured listener.
+TEST_F(DdsSecurity, UnsecuredCameraNodeIsRefusedByTheSecuredController) {
+  const std::string unsecured =
+      std::string("file://") + FL_DDS_CONFIG_DIR + "/cyclonedds-loopback.xml";
+  expect_publishing_writer_refused(34, uri("controller"), unsecured, unsecured, 6, 20s);
 }
 
 // A forged camera: certificate, governance and permissions with the line's names, signed by
@@ -135,17 +144,8 @@ TEST_F(DdsSecurity, UnsecuredCameraNodeIsRefusedByTheSecuredController) {
 // well made and refused only for its CA. (With the line's own camera identity in its place the
 // controller takes all 100 estimates: checked by hand, 2026-12-05.)
 TEST_F(DdsSecurity, CameraOfAForeignCaIsRefused) {
-  Domain domain(35, uri("controller"));
-  Participant controller(domain.id());
-  DdsCameraInput input(controller);
-  PeerProcess forged_listener({"subscribe", "35", "8"}, foreign_uri("controller"));
-  PeerProcess forged_camera({"publish", "35", "0", "20", "100", "exit"}, foreign_uri("camera"));
-  EXPECT_EQ(forged_camera.wait_exit(30s), 0) << forged_camera.output();
-  ASSERT_EQ(forged_listener.wait_exit(30s), 0) << forged_listener.output();
-  EXPECT_EQ(forged_listener.output().rfind("accepted=0", 0), std::string::npos)
-      << forged_listener.output();
-  EXPECT_EQ(input.counters().samples_taken, 0U);
-  EXPECT_EQ(input.matched_writers(), 0U);
+  expect_publishing_writer_refused(35, uri("controller"), foreign_uri("controller"),
+                                   foreign_uri("camera"), 8, 30s);
 }
 
 }  // namespace
