@@ -352,6 +352,9 @@ TEST(TwoProcessDds, ControlRunsForeverUntilSigtermThenStopsTheLineCleanly) {
 // encryption; docs/dds.md): the controller and the twin each with its own identity run and
 // balance their books, and the camera identity, allowed to publish estimates only, cannot
 // stand in for the line's devices.
+// The configuration the package installs for the plant network, secured: the site file and
+// the security file merged, with the settings a site gives in /etc/default/fillet-line (here
+// the loopback card and the certificates just made).
 TEST(TwoProcessDds, SecuredControlAndTwinRunAndACameraCannotPoseAsTheLine) {
   ASSERT_NE(std::getenv("CYCLONEDDS_URI"), nullptr) << "run through ctest";
   const fs::path dir = fs::path(FL_TEST_WORK_DIR) / "secured";
@@ -366,9 +369,11 @@ TEST(TwoProcessDds, SecuredControlAndTwinRunAndACameraCannotPoseAsTheLine) {
     GTEST_SKIP() << "openssl or Cyclone's security plugins missing: " << text(dir / "security.log");
   }
   ASSERT_EQ(made, 0) << text(dir / "security.log");
+  const std::string site_uri = std::string("CYCLONEDDS_URI=file://") + FL_DDS_SITE_XML;
   const auto identity = [&](const char* role) {
-    return "CYCLONEDDS_URI=file://" +
-           (security / ("cyclonedds-" + std::string(role) + ".xml")).string();
+    return std::vector<std::string>{
+        site_uri + ",file://" + FL_DDS_SECURITY_XML, "FL_DDS_INTERFACE=lo",
+        "FL_DDS_SECURITY_DIR=" + security.string(), "FL_DDS_IDENTITY=" + std::string(role)};
   };
   write_tolerant_line_config(dir / "line.yaml");
   // 15 s of feeding: some 15 fillets through every station, enough to show commands,
@@ -378,11 +383,11 @@ TEST(TwoProcessDds, SecuredControlAndTwinRunAndACameraCannotPoseAsTheLine) {
   const pid_t control = spawn(
       {FL_LINECTL, "control", "--duration", duration, "--domain", domain, "--fifo", kControlFifo,
        "--config", (dir / "line.yaml").string(), "--json", (dir / "control.json").string()},
-      dir / "control.log", {identity("controller")});
+      dir / "control.log", identity("controller"));
   const pid_t twin =
       spawn({FL_LINECTL, "twin", "serve", "--plant", "fast", "--seed", "1", "--duration", duration,
              "--domain", domain, "--fifo", kTwinFifo, "--json", (dir / "twin.json").string()},
-            dir / "twin.log", {identity("twin")});
+            dir / "twin.log", identity("twin"));
   const int twin_exit = wait_exit(twin);
   const int control_exit = wait_exit(control);
   const std::string logs =
@@ -402,11 +407,26 @@ TEST(TwoProcessDds, SecuredControlAndTwinRunAndACameraCannotPoseAsTheLine) {
   // not read commands: Cyclone's access control refuses the twin's topics at creation.
   const pid_t impostor = spawn({FL_LINECTL, "twin", "serve", "--plant", "fast", "--duration", "5s",
                                 "--domain", domain, "--wait", "2s"},
-                               dir / "impostor.log", {identity("camera")});
+                               dir / "impostor.log", identity("camera"));
   const int impostor_exit = wait_exit(impostor);
   const std::string impostor_log = text(dir / "impostor.log");
   EXPECT_NE(impostor_exit, 0) << impostor_log;
   EXPECT_NE(impostor_log.find("Not Allowed By Security"), std::string::npos) << impostor_log;
+
+  // A site that forgot the network card or the role is told which setting, before any traffic.
+  const auto refused_for = [&](std::vector<std::string> environment, const char* missing) {
+    const pid_t unconfigured = spawn({FL_LINECTL, "control", "--duration", "1s", "--domain", domain,
+                                      "--config", (dir / "line.yaml").string()},
+                                     dir / "unset.log", environment);
+    const int exit_code = wait_exit(unconfigured);
+    const std::string log = text(dir / "unset.log");
+    EXPECT_NE(exit_code, 0) << log;
+    EXPECT_NE(log.find(std::string(missing) + ": unset"), std::string::npos) << log;
+  };
+  refused_for({site_uri, "FL_DDS_INTERFACE="}, "FL_DDS_INTERFACE");
+  std::vector<std::string> no_role = identity("controller");
+  no_role.back() = "FL_DDS_IDENTITY=";
+  refused_for(no_role, "FL_DDS_IDENTITY");
 }
 
 }  // namespace

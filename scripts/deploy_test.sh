@@ -45,6 +45,15 @@ if [[ -f $root/etc/fillet-line/hmi.yaml ]]; then
 fi
 in_root dpkg-query --control-show fillet-line conffiles | grep -q '^/etc/fillet-line/line.yaml' ||
   fail "/etc/fillet-line/line.yaml is not a conffile"
+# DDS Security on the plant network: the key's folder private to the service, and every plugin
+# the installed security file names present in the root (libddsc0debian, a dependency).
+mode=$(in_root stat -c '%U:%G %a' /etc/fillet-line/dds/security) || fail "no dds/security folder"
+[[ $mode == "root:fillet-line 750" ]] || fail "/etc/fillet-line/dds/security is $mode"
+plugins=$(grep -o 'path="[^"]*"' "$root/etc/fillet-line/dds/cyclonedds-security.xml" | cut -d'"' -f2)
+[[ $(wc -w <<<"$plugins") -eq 3 ]] || fail "cyclonedds-security.xml names plugins: $plugins"
+for plugin in $plugins; do
+  [[ -f $root$plugin ]] || fail "cyclonedds-security.xml names $plugin, missing in the root"
+done
 for unit in fillet-line.service fillet-line-control.service; do
   in_root systemd-analyze verify /usr/lib/systemd/system/$unit ||
     fail "systemd-analyze verify on the installed $unit"

@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Generates a DDS Security setup for the line into OUT_DIR: a CA (identity and permissions
 # CA in one), one identity certificate and key per role (camera, controller, twin, hmi), the
-# signed governance and permissions documents of config/dds/, and one Cyclone configuration per
-# role (cyclonedds-<role>.xml) from the secure template. --test-intruder adds the tests'
+# signed governance and permissions documents of config/dds/, and one Cyclone security
+# configuration per role (cyclonedds-security-<role>.xml) from config/dds/cyclonedds-security.xml.in,
+# to be given after a network configuration:
+#   CYCLONEDDS_URI=file://$PWD/config/dds/cyclonedds-loopback.xml,file://OUT_DIR/cyclonedds-security-camera.xml
+# --test-intruder adds the tests'
 # "intruder" identity and its grant (drivers/dds/tests/intruder_grant.xml, hmi/ topics only).
 # Adapted from ../shared/recipes/dds/sec-gen.sh. For tests and development: on a plant the
 # CA key lives offline and each node gets only its own key.
@@ -41,6 +44,7 @@ for plugin in auth ac crypto; do
 done
 
 mkdir -p "$out_dir"
+out_dir=$(cd "$out_dir" && pwd)  # the configurations name files by absolute path
 cd "$out_dir"
 # P-256 keys: what Cyclone's authentication plugin supports besides RSA-2048, and fast.
 openssl ecparam -name prime256v1 -genkey -noout -out ca_key.pem
@@ -51,8 +55,8 @@ for role in "${roles[@]}"; do
   openssl req -new -key "${role}_key.pem" -subj "/C=NL/O=FilletLine/CN=$role" -out "$role.csr"
   openssl x509 -req -in "$role.csr" -CA ca_cert.pem -CAkey ca_key.pem -CAcreateserial \
     -days 3650 -sha256 -out "${role}_cert.pem" 2>/dev/null
-  sed -e "s|@SEC_DIR@|$out_dir|g" -e "s|@IDENTITY@|$role|g" -e "s|@PLUGIN_DIR@|$plugin_dir|g" \
-    "$config_dir/cyclonedds-loopback-secure.xml.in" >"cyclonedds-$role.xml"
+  sed -e "s|@SECURITY_DIR@|$out_dir|g" -e "s|@IDENTITY@|$role|g" -e "s|@PLUGIN_DIR@|$plugin_dir|g" \
+    "$config_dir/cyclonedds-security.xml.in" >"cyclonedds-security-$role.xml"
 done
 openssl smime -sign -in "$config_dir/governance.xml" -text -out governance.p7s \
   -signer ca_cert.pem -inkey ca_key.pem

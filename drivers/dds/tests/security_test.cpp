@@ -52,12 +52,13 @@ class DdsSecurity : public ::testing::Test {
     }
     ASSERT_EQ(status_, 0) << "make_security.sh failed, see " << dir_.string() << ".log";
   }
-  static std::string uri(const char* role) {
-    return "file://" + (dir_ / ("cyclonedds-" + std::string(role) + ".xml")).string();
+  // The loopback network, then the role's security (Cyclone merges the two).
+  static std::string secured(const std::string& security_dir, const char* role) {
+    return std::string("file://") + FL_DDS_CONFIG_DIR + "/cyclonedds-loopback.xml,file://" +
+           security_dir + "/cyclonedds-security-" + role + ".xml";
   }
-  static std::string foreign_uri(const char* role) {
-    return "file://" + foreign_dir() + "/cyclonedds-" + std::string(role) + ".xml";
-  }
+  static std::string uri(const char* role) { return secured(dir_.string(), role); }
+  static std::string foreign_uri(const char* role) { return secured(foreign_dir(), role); }
 
   static inline std::filesystem::path dir_;
   static inline int status_ = -1;
