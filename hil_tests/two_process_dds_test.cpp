@@ -414,7 +414,7 @@ TEST(TwoProcessDds, SecuredControlAndTwinRunAndACameraCannotPoseAsTheLine) {
   EXPECT_NE(impostor_log.find("Not Allowed By Security"), std::string::npos) << impostor_log;
 
   // A site that forgot the network card or the role is told which setting, before any traffic.
-  const auto refused_for = [&](std::vector<std::string> environment, const char* missing) {
+  const auto refused_for = [&](const std::vector<std::string>& environment, const char* missing) {
     const pid_t unconfigured = spawn({FL_LINECTL, "control", "--duration", "1s", "--domain", domain,
                                       "--config", (dir / "line.yaml").string()},
                                      dir / "unset.log", environment);

@@ -27,18 +27,6 @@ constexpr std::uint32_t kDeviceProfileMask = 0xFFFF;  // 0x1000 low word: the Ci
 constexpr std::uint32_t kDriveProfile = 402;
 constexpr std::uint32_t kIoProfile = 401;
 
-// One expedited SDO write of the start-up configuration; a failure goes into `problems`
-// naming the device and the object.
-bool write_object(SdoClient& sdo, NodeId id, const std::string& who, SdoAddress address,
-                  std::uint32_t value, std::uint8_t size, std::vector<std::string>& problems) {
-  const SdoResult result = sdo.download(id, address, value, size);
-  if (!result.ok()) {
-    problems.push_back(who + ": SDO write " + hex_text(address.index, 4) + ":" +
-                       hex_text(address.subindex, 2) + " failed: " + result.describe());
-  }
-  return result.ok();
-}
-
 }  // namespace
 
 const char* to_string(CanopenEventKind kind) {
@@ -59,6 +47,26 @@ const char* to_string(CanopenEventKind kind) {
       return "CiA 402 state";
     case CanopenEventKind::kBusStateChanged:
       return "bus state";
+    case CanopenEventKind::kReconfigured:
+      return "configured again after its reboot and started";
+    case CanopenEventKind::kReconfigurationFailed:
+      return "configuration after its reboot failed";
+  }
+  return "unknown";
+}
+
+const char* to_string(ReconfigurationFailure failure) {
+  switch (failure) {
+    case ReconfigurationFailure::kAborted:
+      return "the device aborted the transfer";
+    case ReconfigurationFailure::kTimeout:
+      return "no answer within the SDO timeout";
+    case ReconfigurationFailure::kProtocol:
+      return "an answer that does not fit the request";
+    case ReconfigurationFailure::kWrongValue:
+      return "the device reads another value than the configuration's";
+    case ReconfigurationFailure::kSendFailed:
+      return "the request could not be sent";
   }
   return "unknown";
 }
@@ -79,6 +87,11 @@ std::string describe(const CanopenEvent& event) {
       break;
     case CanopenEventKind::kBusStateChanged:
       text = std::string("bus: ") + to_string(static_cast<CanErrorState>(event.code));
+      break;
+    case CanopenEventKind::kReconfigurationFailed:
+      text += " at " + hex_text(event.code >> 8U, 4) + ":" + hex_text(event.code & 0xFFU, 2) +
+              ": " + to_string(static_cast<ReconfigurationFailure>(event.detail)) +
+              " (the node stays out until its next boot-up or start-up)";
       break;
     default:
       break;
@@ -107,10 +120,12 @@ std::optional<bool> fault_transition(const CanopenEvent& event) {
   switch (event.kind) {
     case CanopenEventKind::kHeartbeatLost:
     case CanopenEventKind::kEmergency:
-    case CanopenEventKind::kBootUp:  // cleared only by the next start_up()
+    case CanopenEventKind::kBootUp:  // cleared once the node is configured again
+    case CanopenEventKind::kReconfigurationFailed:
       return true;
     case CanopenEventKind::kHeartbeatRecovered:
     case CanopenEventKind::kEmergencyCleared:
+    case CanopenEventKind::kReconfigured:
       return false;
     case CanopenEventKind::kNmtStateChanged:
       return changed([&](std::uint32_t state) { return !operational(state); });
@@ -146,6 +161,7 @@ CanopenIo::CanopenIo(CanBus& bus, CanConfig config)
         std::max<std::int64_t>(1, heartbeat_ns / config_.cycle_period_ns));
   }
   build_routes();
+  build_setup_plans();
 }
 
 void CanopenIo::build_routes() {
@@ -295,7 +311,15 @@ void CanopenIo::handle_frame(const CanFrame& frame, std::int64_t now_ns) {
         push_event(CanopenEventKind::kHeartbeatRecovered, node.id, now_ns, 0);
       }
       if (*state == NmtState::kBootUp) {
-        node.rebooted = true;  // cleared by start_up() after it configured the node
+        // Cleared once the node is configured again: by start_up(), or by the cycle when it
+        // rebooted while running (a transfer to it in flight is void: the device forgot it).
+        node.rebooted = true;
+        if (!nmt_commanded_) {
+          node.reconfigure_wanted = true;
+          if (reconfiguration_.active && reconfiguration_.slot == entry.slot) {
+            reconfiguration_ = Reconfiguration{};
+          }
+        }
         push_event(CanopenEventKind::kBootUp, node.id, now_ns, 0);
         node.nmt = NmtState::kPreOperational;  // a booted node enters pre-operational
         return;
@@ -325,7 +349,12 @@ void CanopenIo::handle_frame(const CanFrame& frame, std::int64_t now_ns) {
       return;
     }
     case Route::kSdoResponse:
-      ++counters_.unexpected_sdo;  // no SDO transfer runs inside the cycle
+      if (reconfiguration_.active && reconfiguration_.awaiting &&
+          reconfiguration_.slot == entry.slot) {
+        take_reconfiguration_response(frame, now_ns);
+      } else {
+        ++counters_.unexpected_sdo;  // no transfer of the cycle's waits for it
+      }
       return;
     case Route::kDriveTpdo1:
     case Route::kDriveTpdo2: {
@@ -610,6 +639,7 @@ void CanopenIo::write(const OutputImage& out) {
     safety.digital = lamps;
     send_outputs(IoModuleId::kSafety, safety);
   }
+  advance_reconfiguration(now_ns_);
   for (NodeRuntime& node : nodes_) {
     if (!node.start_wanted) continue;
     node.start_wanted = false;
@@ -675,6 +705,7 @@ std::size_t CanopenIo::log_events(const std::function<void(const CanopenEvent&)>
     if (observer) observer(event);
     const bool bad = event.kind == CanopenEventKind::kHeartbeatLost ||
                      event.kind == CanopenEventKind::kEmergency ||
+                     event.kind == CanopenEventKind::kReconfigurationFailed ||
                      (event.kind == CanopenEventKind::kBusStateChanged && event.code != 0);
     if (bad) {
       spdlog::warn("canopen: {}", describe(event));
@@ -707,85 +738,40 @@ NodeStatus CanopenIo::io_status(IoModuleId module) const {
 
 // ---------------------------------------------------------------- start-up
 
-bool CanopenIo::write_pdo(SdoClient& sdo, NodeId node, std::uint16_t communication_index,
-                          std::uint16_t mapping_index, std::uint32_t cob_id,
-                          std::uint8_t transmission_type, const canopen::PdoMapping& mapping,
-                          std::vector<std::string>& problems) {
+void CanopenIo::append_pdo_steps(std::vector<SetupStep>& steps, std::uint16_t communication_index,
+                                 std::uint16_t mapping_index, std::uint32_t cob_id,
+                                 std::uint8_t transmission_type,
+                                 const canopen::PdoMapping& mapping) const {
+  using Kind = SetupStep::Kind;
   // CiA 301 7.5.2.35/36: a PDO's mapping may only change while the PDO is invalid (bit 31)
   // and its mapping count is 0.
-  struct Step {
-    SdoAddress address;
-    std::uint32_t value;
-    std::uint8_t size;
-  };
-  std::vector<Step> steps;
-  steps.push_back({{communication_index, 1}, cob_id | canopen::kPdoCobIdInvalid, 4});
+  steps.push_back({Kind::kWrite, {communication_index, 1}, cob_id | canopen::kPdoCobIdInvalid, 4});
   if (config_.write_pdo_mappings) {
-    steps.push_back({{mapping_index, 0}, 0, 1});
+    steps.push_back({Kind::kWrite, {mapping_index, 0}, 0, 1});
     for (std::uint8_t i = 0; i < mapping.count; ++i) {
-      steps.push_back({{mapping_index, static_cast<std::uint8_t>(i + 1)},
+      steps.push_back({Kind::kWrite,
+                       {mapping_index, static_cast<std::uint8_t>(i + 1)},
                        mapping.entries[i].mapping_value(),
                        4});
     }
-    steps.push_back({{mapping_index, 0}, mapping.count, 1});
-  }
-  steps.push_back({{communication_index, 2}, transmission_type, 1});
-  steps.push_back({{communication_index, 1}, cob_id, 4});
-  for (const Step& step : steps) {
-    const SdoResult result = sdo.download(node, step.address, step.value, step.size);
-    if (!result.ok()) {
-      problems.push_back("node " + std::to_string(node) + ": SDO write " +
-                         hex_text(step.address.index, 4) + ":" +
-                         hex_text(step.address.subindex, 2) + " = " + hex_text(step.value, 8) +
-                         " failed: " + result.describe());
-      return false;
+    steps.push_back({Kind::kWrite, {mapping_index, 0}, mapping.count, 1});
+  } else {
+    // A built-in mapping is read back: the master packs by can.yaml's, so they must agree.
+    const char* differs = "the built-in PDO mapping differs from can.yaml's";
+    steps.push_back(
+        {Kind::kExpect, {mapping_index, 0}, mapping.count, 0, 0xFFFFFFFFU, differs, &mapping});
+    for (std::uint8_t i = 0; i < mapping.count; ++i) {
+      steps.push_back({Kind::kExpect,
+                       {mapping_index, static_cast<std::uint8_t>(i + 1)},
+                       mapping.entries[i].mapping_value(),
+                       0,
+                       0xFFFFFFFFU,
+                       differs,
+                       &mapping});
     }
   }
-  return config_.write_pdo_mappings ||
-         check_pdo_mapping(sdo, node, mapping_index, mapping, problems);
-}
-
-bool CanopenIo::check_pdo_mapping(SdoClient& sdo, NodeId node, std::uint16_t mapping_index,
-                                  const canopen::PdoMapping& mapping,
-                                  std::vector<std::string>& problems) {
-  // A built-in mapping is read back: the master packs by can.yaml's, so they must agree.
-  const auto describe = [](const canopen::PdoMapping& entries) {
-    std::string text;
-    for (std::uint8_t i = 0; i < entries.count; ++i) {
-      text += (i == 0 ? "" : ", ") + hex_text(entries.entries[i].mapping_value(), 8);
-    }
-    return text.empty() ? std::string("nothing") : text;
-  };
-  const std::string where =
-      "node " + std::to_string(node) + ": mapping " + hex_text(mapping_index, 4);
-  canopen::PdoMapping device;
-  const SdoResult count = sdo.upload(node, {mapping_index, 0});
-  if (!count.ok()) {
-    problems.push_back(where + ": SDO read of the entry count failed: " + count.describe());
-    return false;
-  }
-  if (count.value > canopen::kMaxPdoEntries) {
-    problems.push_back(where + ": the device reports " + std::to_string(count.value) +
-                       " entries, a PDO holds at most 8");
-    return false;
-  }
-  device.count = static_cast<std::uint8_t>(count.value);
-  for (std::uint8_t i = 0; i < device.count; ++i) {
-    const SdoResult entry = sdo.upload(node, {mapping_index, static_cast<std::uint8_t>(i + 1)});
-    if (!entry.ok()) {
-      problems.push_back(where + ": SDO read of entry " + std::to_string(i + 1) +
-                         " failed: " + entry.describe());
-      return false;
-    }
-    device.entries[i] = canopen::PdoEntry::from_mapping_value(entry.value);
-  }
-  if (describe(device) != describe(mapping)) {
-    problems.push_back(where + " on the device is " + describe(device) + ", can.yaml maps " +
-                       describe(mapping) +
-                       " (pdo_mapping.write_to_devices is false: the device's is kept)");
-    return false;
-  }
-  return true;
+  steps.push_back({Kind::kWrite, {communication_index, 2}, transmission_type, 1});
+  steps.push_back({Kind::kWrite, {communication_index, 1}, cob_id, 4});
 }
 
 std::uint32_t CanopenIo::master_heartbeat_consumer() const {
@@ -793,101 +779,236 @@ std::uint32_t CanopenIo::master_heartbeat_consumer() const {
   return (std::uint32_t{config_.master.node_id} << 16U) | config_.master.heartbeat_timeout_ms;
 }
 
-bool CanopenIo::configure_drive(SdoClient& sdo, std::size_t d, std::vector<std::string>& problems) {
-  const DriveNodeConfig& node = config_.drives[d];
-  const DrivePdoMappings& pdos = config_.drive_pdos;
-  // A cyclic RPDO takes effect at the SYNC, with every other; a ramp-only one on receipt.
-  const auto transmission = [](const MappedPdo& pdo) {
-    return pdo.cyclic ? kSynchronous : kEventDriven;
+void CanopenIo::build_setup_plans() {
+  using Kind = SetupStep::Kind;
+  const auto write = [](std::vector<SetupStep>& steps, SdoAddress address, std::uint32_t value,
+                        std::uint8_t size) {
+    steps.push_back({Kind::kWrite, address, value, size});
   };
-  const NodeId id = node.node_id;
-  const std::string who = "drive " + std::string(config_name(static_cast<DriveId>(d))) + " (node " +
-                          std::to_string(id) + ")";
-  const SdoResult device_type = sdo.upload(id, {0x1000, 0});
-  if (!device_type.ok()) {
-    problems.push_back(who + ": SDO read 0x1000 failed: " + device_type.describe());
-    return false;
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    const DriveNodeConfig& node = config_.drives[d];
+    const DrivePdoMappings& pdos = config_.drive_pdos;
+    std::vector<SetupStep>& steps = setup_plans_[d];
+    // A cyclic RPDO takes effect at the SYNC, with every other; a ramp-only one on receipt.
+    const auto transmission = [](const MappedPdo& pdo) {
+      return pdo.cyclic ? kSynchronous : kEventDriven;
+    };
+    const std::uint32_t max_accel =
+        acceleration_to_drive_units(static_cast<DriveId>(d), node.max_accel_mps2);
+    // Watch the master's heartbeat and quick-stop (0x6007 = 3) at the rated deceleration when
+    // it falls silent: a dead controller must not leave a belt running.
+    constexpr std::uint32_t kQuickStopOnLoss = 3;
+    steps.push_back({Kind::kExpect,
+                     {0x1000, 0},
+                     kDriveProfile,
+                     0,
+                     kDeviceProfileMask,
+                     "device type (0x1000) is not a CiA 402 drive"});
+    write(steps, {0x1017, 0}, node.heartbeat_producer_ms, 2);
+    write(steps, {0x1016, 1}, master_heartbeat_consumer(), 4);
+    write(steps, {0x6007, 0}, kQuickStopOnLoss, 2);
+    write(steps, {0x6085, 0}, max_accel, 4);
+    append_pdo_steps(steps, 0x1400, 0x1600, node.rpdo1_cob_id, transmission(drive_rpdos_[0]),
+                     pdos.rpdo1);
+    append_pdo_steps(steps, 0x1401, 0x1601, node.rpdo2_cob_id, transmission(drive_rpdos_[1]),
+                     pdos.rpdo2);
+    append_pdo_steps(steps, 0x1800, 0x1A00, node.tpdo1_cob_id, kSynchronous, pdos.tpdo1);
+    append_pdo_steps(steps, 0x1801, 0x1A01, node.tpdo2_cob_id, node.tpdo2_every_syncs, pdos.tpdo2);
+    write(steps, {0x6060, 0}, kProfileVelocityMode, 1);
+    write(steps, {0x6083, 0}, max_accel, 4);
+    write(steps, {0x6084, 0}, max_accel, 4);
+    steps.push_back({Kind::kExpect,
+                     {0x6061, 0},
+                     kProfileVelocityMode,
+                     0,
+                     0xFFU,
+                     "mode of operation display (0x6061) is not profile velocity (3)"});
   }
-  if ((device_type.value & kDeviceProfileMask) != kDriveProfile) {
-    problems.push_back(who + ": device type " + hex_text(device_type.value, 8) +
-                       " is not a CiA 402 drive");
-    return false;
+  for (std::size_t m = 0; m < kIoModuleCount; ++m) {
+    const IoModuleConfig& node = config_.io_modules[m];
+    std::vector<SetupStep>& steps = setup_plans_[kDriveCount + m];
+    steps.push_back({Kind::kExpect,
+                     {0x1000, 0},
+                     kIoProfile,
+                     0,
+                     kDeviceProfileMask,
+                     "device type (0x1000) is not a CiA 401 I/O module"});
+    // Watch the master's heartbeat; when it falls silent every digital output goes off (flip
+    // plates back, roller up, lamps off) and every analogue output to 0 (hopper gate closed,
+    // leveller and centring shift at rest).
+    write(steps, {0x1017, 0}, node.heartbeat_producer_ms, 2);
+    write(steps, {0x1016, 1}, master_heartbeat_consumer(), 4);
+    write(steps, {0x6206, 1}, 0xFF, 1);
+    write(steps, {0x6207, 1}, 0x00, 1);
+    for (std::uint8_t channel = 1; channel <= 3; ++channel) {
+      write(steps, {0x6443, channel}, 1, 1);
+      write(steps, {0x6444, channel}, 0, 4);
+    }
+    append_pdo_steps(steps, 0x1400, 0x1600, node.rpdo1_cob_id, kSynchronous, config_.io_pdos.rpdo1);
+    append_pdo_steps(steps, 0x1800, 0x1A00, node.tpdo1_cob_id, kSynchronous, config_.io_pdos.tpdo1);
   }
-  const auto write = [&](SdoAddress address, std::uint32_t value, std::uint8_t size) {
-    return write_object(sdo, id, who, address, value, size, problems);
+}
+
+std::string CanopenIo::describe_mapping_mismatch(SdoClient& sdo, std::size_t slot,
+                                                 const SetupStep& step) {
+  const auto describe = [](const canopen::PdoMapping& entries) {
+    std::string text;
+    for (std::uint8_t i = 0; i < entries.count; ++i) {
+      text += (i == 0 ? "" : ", ") + hex_text(entries.entries[i].mapping_value(), 8);
+    }
+    return text.empty() ? std::string("nothing") : text;
   };
-  const std::uint32_t max_accel =
-      acceleration_to_drive_units(static_cast<DriveId>(d), node.max_accel_mps2);
-  // Watch the master's heartbeat and quick-stop (0x6007 = 3) at the rated deceleration when it
-  // falls silent: a dead controller must not leave a belt running.
-  constexpr std::uint32_t kQuickStopOnLoss = 3;
-  const bool written =
-      write({0x1017, 0}, node.heartbeat_producer_ms, 2) &&
-      write({0x1016, 1}, master_heartbeat_consumer(), 4) &&
-      write({0x6007, 0}, kQuickStopOnLoss, 2) && write({0x6085, 0}, max_accel, 4) &&
-      write_pdo(sdo, id, 0x1400, 0x1600, node.rpdo1_cob_id, transmission(drive_rpdos_[0]),
-                pdos.rpdo1, problems) &&
-      write_pdo(sdo, id, 0x1401, 0x1601, node.rpdo2_cob_id, transmission(drive_rpdos_[1]),
-                pdos.rpdo2, problems) &&
-      write_pdo(sdo, id, 0x1800, 0x1A00, node.tpdo1_cob_id, kSynchronous, pdos.tpdo1, problems) &&
-      write_pdo(sdo, id, 0x1801, 0x1A01, node.tpdo2_cob_id, node.tpdo2_every_syncs, pdos.tpdo2,
-                problems) &&
-      write({0x6060, 0}, kProfileVelocityMode, 1) && write({0x6083, 0}, max_accel, 4) &&
-      write({0x6084, 0}, max_accel, 4);
-  if (!written) {
-    return false;
+  const std::uint16_t mapping_index = step.address.index;
+  const std::string where =
+      "node " + std::to_string(nodes_[slot].id) + ": mapping " + hex_text(mapping_index, 4);
+  const SdoResult count = sdo.upload(nodes_[slot].id, {mapping_index, 0});
+  if (!count.ok() || count.value > canopen::kMaxPdoEntries) {
+    return where + ": the device reports " +
+           (count.ok() ? std::to_string(count.value) + " entries, a PDO holds at most 8"
+                       : "no entry count: " + count.describe());
   }
-  const SdoResult mode = sdo.upload(id, {0x6061, 0});  // modes of operation display
-  if (!mode.ok() || mode.value != kProfileVelocityMode) {
-    problems.push_back(who + ": mode of operation display is not profile velocity (3): " +
-                       (mode.ok() ? std::to_string(mode.value) : mode.describe()));
-    return false;
+  canopen::PdoMapping device;
+  device.count = static_cast<std::uint8_t>(count.value);
+  for (std::uint8_t i = 0; i < device.count; ++i) {
+    const SdoResult entry =
+        sdo.upload(nodes_[slot].id, {mapping_index, static_cast<std::uint8_t>(i + 1)});
+    if (!entry.ok()) {
+      return where + ": SDO read of entry " + std::to_string(i + 1) +
+             " failed: " + entry.describe();
+    }
+    device.entries[i] = canopen::PdoEntry::from_mapping_value(entry.value);
   }
-  // The ramps just written by SDO are what a ramp-only RPDO would carry now.
-  const DriveRpdoValues configured{0, 0, max_accel};
-  for (std::size_t rpdo = 0; rpdo < 2; ++rpdo) {
-    if (!drive_rpdos_[rpdo].cyclic) {
-      fill_drive_rpdo(drive_rpdos_[rpdo], configured, drives_[d].rpdo_last[rpdo]);
-      drives_[d].rpdo_sent[rpdo] = true;
+  return where + " on the device is " + describe(device) + ", can.yaml maps " +
+         describe(*step.mapping) + " (pdo_mapping.write_to_devices is false: the device's is kept)";
+}
+
+bool CanopenIo::configure_node(SdoClient& sdo, std::size_t slot,
+                               std::vector<std::string>& problems) {
+  const NodeId id = nodes_[slot].id;
+  for (const SetupStep& step : setup_plans_[slot]) {
+    const bool writing = step.kind == SetupStep::Kind::kWrite;
+    const SdoResult result = writing ? sdo.download(id, step.address, step.value, step.size_bytes)
+                                     : sdo.upload(id, step.address);
+    const std::string object =
+        hex_text(step.address.index, 4) + ":" + hex_text(step.address.subindex, 2);
+    if (!result.ok()) {
+      problems.push_back(
+          node_label(slot) + ": SDO " +
+          (writing ? "write " + object + " = " + hex_text(step.value, 8) : "read " + object) +
+          " failed: " + result.describe());
+      return false;
+    }
+    if (!writing && (result.value & step.mask) != step.value) {
+      problems.push_back(step.mapping != nullptr ? describe_mapping_mismatch(sdo, slot, step)
+                                                 : node_label(slot) + ": " + step.mismatch +
+                                                       ": reads " + hex_text(result.value, 8));
+      return false;
     }
   }
+  node_configured(slot);
   return true;
 }
 
-bool CanopenIo::configure_io(SdoClient& sdo, std::size_t m, std::vector<std::string>& problems) {
-  const IoModuleConfig& node = config_.io_modules[m];
-  const NodeId id = node.node_id;
-  const std::string who = "I/O module " + std::string(config_name(static_cast<IoModuleId>(m))) +
-                          " (node " + std::to_string(id) + ")";
-  const SdoResult device_type = sdo.upload(id, {0x1000, 0});
-  if (!device_type.ok()) {
-    problems.push_back(who + ": SDO read 0x1000 failed: " + device_type.describe());
-    return false;
+void CanopenIo::node_configured(std::size_t slot) {
+  if (slot >= kDriveCount) return;
+  const std::uint32_t max_accel =
+      acceleration_to_drive_units(static_cast<DriveId>(slot), config_.drives[slot].max_accel_mps2);
+  const DriveRpdoValues configured{0, 0, max_accel};
+  for (std::size_t rpdo = 0; rpdo < 2; ++rpdo) {
+    if (!drive_rpdos_[rpdo].cyclic) {
+      fill_drive_rpdo(drive_rpdos_[rpdo], configured, drives_[slot].rpdo_last[rpdo]);
+      drives_[slot].rpdo_sent[rpdo] = true;
+    }
   }
-  if ((device_type.value & kDeviceProfileMask) != kIoProfile) {
-    problems.push_back(who + ": device type " + hex_text(device_type.value, 8) +
-                       " is not a CiA 401 I/O module");
-    return false;
+}
+
+// ---------------------------------------------------------------- a rebooted node, in the cycle
+
+void CanopenIo::advance_reconfiguration(std::int64_t now_ns) {
+  if (!reconfiguration_.active) {
+    // The lowest slot first: drives before modules, as at start-up.
+    for (std::size_t slot = 0; slot < kNodeCount; ++slot) {
+      if (!nodes_[slot].reconfigure_wanted) continue;
+      nodes_[slot].reconfigure_wanted = false;
+      reconfiguration_ = Reconfiguration{true, slot, 0, false, 0};
+      break;
+    }
+    if (!reconfiguration_.active) return;
   }
-  const auto write = [&](SdoAddress address, std::uint32_t value, std::uint8_t size) {
-    return write_object(sdo, id, who, address, value, size, problems);
-  };
-  // Watch the master's heartbeat; when it falls silent every digital output goes off (flip
-  // plates back, roller up, lamps off) and every analogue output to 0 (hopper gate closed,
-  // leveller and centring shift at rest).
-  bool written = write({0x1017, 0}, node.heartbeat_producer_ms, 2) &&
-                 write({0x1016, 1}, master_heartbeat_consumer(), 4) &&
-                 write({0x6206, 1}, 0xFF, 1) && write({0x6207, 1}, 0x00, 1);
-  for (std::uint8_t channel = 1; channel <= 3 && written; ++channel) {
-    written = write({0x6443, channel}, 1, 1) && write({0x6444, channel}, 0, 4);
+  Reconfiguration& run = reconfiguration_;
+  const std::vector<SetupStep>& steps = setup_plans_[run.slot];
+  const NodeId id = nodes_[run.slot].id;
+  if (run.awaiting) {
+    if (now_ns - run.sent_ns <= std::int64_t{config_.sdo_timeout_ms} * 1'000'000) return;
+    // Tell the device the transfer is over, as the blocking client does.
+    bus_.send(canopen::make_sdo_abort(canopen::kSdoRequestBase + id, steps[run.step].address,
+                                      canopen::sdo_abort::kTimeout));
+    end_reconfiguration(now_ns, ReconfigurationFailure::kTimeout);
+    return;
   }
-  if (!written) {
-    return false;
+  if (run.step == steps.size()) {
+    end_reconfiguration(now_ns, std::nullopt);
+    return;
   }
-  return write_pdo(sdo, id, 0x1400, 0x1600, node.rpdo1_cob_id, kSynchronous, config_.io_pdos.rpdo1,
-                   problems) &&
-         write_pdo(sdo, id, 0x1800, 0x1A00, node.tpdo1_cob_id, kSynchronous, config_.io_pdos.tpdo1,
-                   problems);
+  const SetupStep& step = steps[run.step];
+  const CanFrame request =
+      step.kind == SetupStep::Kind::kWrite
+          ? canopen::make_sdo_download(id, step.address, step.value, step.size_bytes)
+          : canopen::make_sdo_upload(id, step.address);
+  if (!bus_.send(request)) {
+    ++counters_.send_failures;
+    end_reconfiguration(now_ns, ReconfigurationFailure::kSendFailed);
+    return;
+  }
+  run.awaiting = true;
+  run.sent_ns = now_ns;
+}
+
+void CanopenIo::take_reconfiguration_response(const CanFrame& frame, std::int64_t now_ns) {
+  Reconfiguration& run = reconfiguration_;
+  const std::vector<SetupStep>& steps = setup_plans_[run.slot];
+  const SetupStep& step = steps[run.step];
+  const canopen::SdoResponse response = canopen::decode_sdo_response(frame);
+  run.awaiting = false;
+  if (response.kind == canopen::SdoResponseKind::kAbort) {
+    end_reconfiguration(now_ns, ReconfigurationFailure::kAborted);
+    return;
+  }
+  const bool writing = step.kind == SetupStep::Kind::kWrite;
+  const bool fits = response.address == step.address &&
+                    response.kind == (writing ? canopen::SdoResponseKind::kDownloadDone
+                                              : canopen::SdoResponseKind::kUploadExpedited);
+  if (!fits) {
+    bus_.send(canopen::make_sdo_abort(canopen::kSdoRequestBase + nodes_[run.slot].id, step.address,
+                                      canopen::sdo_abort::kGeneral));
+    end_reconfiguration(now_ns, ReconfigurationFailure::kProtocol);
+    return;
+  }
+  if (!writing && (response.value & step.mask) != step.value) {
+    end_reconfiguration(now_ns, ReconfigurationFailure::kWrongValue);
+    return;
+  }
+  ++run.step;
+}
+
+void CanopenIo::end_reconfiguration(std::int64_t now_ns,
+                                    std::optional<ReconfigurationFailure> failure) {
+  Reconfiguration& run = reconfiguration_;
+  NodeRuntime& node = nodes_[run.slot];
+  if (failure) {
+    const SdoAddress address = setup_plans_[run.slot][run.step].address;
+    ++counters_.reconfigurations_failed;
+    push_event(CanopenEventKind::kReconfigurationFailed, node.id, now_ns,
+               (std::uint32_t{address.index} << 8U) | address.subindex,
+               static_cast<std::uint8_t>(*failure));
+  } else {
+    node_configured(run.slot);
+    node.rebooted = false;
+    node.start_wanted = true;  // this write() sends it NMT start
+    ++counters_.nodes_reconfigured;
+    push_event(CanopenEventKind::kReconfigured, node.id, now_ns, 0);
+  }
+  run = Reconfiguration{};
 }
 
 bool CanopenIo::cycle_until(const BusClock& clock, const OutputImage& out, InputImage& in,
@@ -921,10 +1042,12 @@ StartupReport CanopenIo::start_up(const BusClock& clock, bool enable_drives) {
 StartupReport CanopenIo::run_start_up(const BusClock& clock, bool enable_drives) {
   StartupReport report;
   const std::int64_t started_ns = clock.now_ns();
+  reconfiguration_ = Reconfiguration{};  // the start-up configures every node afresh
   for (NodeRuntime& node : nodes_) {
     node.heard = false;
     node.lost = false;
     node.rebooted = false;
+    node.reconfigure_wanted = false;
     node.emcy_code = 0;
     node.nmt = NmtState::kBootUp;
   }
@@ -966,14 +1089,9 @@ StartupReport CanopenIo::run_start_up(const BusClock& clock, bool enable_drives)
   SdoClient sdo(bus_, clock, std::int64_t{config_.sdo_timeout_ms} * 1'000'000,
                 [this, &clock](const CanFrame& frame) { handle_frame(frame, clock.now_ns()); });
   bool configured = report.problems.empty();
-  for (std::size_t d = 0; d < kDriveCount; ++d) {
-    if (nodes_[d].rebooted) {
-      configured = configure_drive(sdo, d, report.problems) && configured;
-    }
-  }
-  for (std::size_t m = 0; m < kIoModuleCount; ++m) {
-    if (nodes_[kDriveCount + m].rebooted) {
-      configured = configure_io(sdo, m, report.problems) && configured;
+  for (std::size_t slot = 0; slot < kNodeCount; ++slot) {
+    if (nodes_[slot].rebooted) {
+      configured = configure_node(sdo, slot, report.problems) && configured;
     }
   }
 

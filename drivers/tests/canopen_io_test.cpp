@@ -396,6 +396,113 @@ TEST(CanopenIo, LostDriveFaultsWithinItsTimeoutAndRecovers) {
             kinds.end());
 }
 
+// Every event of `kind` for `node` the master has queued, popping them all.
+std::vector<CanopenEvent> events_of(LoopbackRig& rig, CanopenEventKind kind, NodeId node) {
+  std::vector<CanopenEvent> found;
+  CanopenEvent event;
+  while (rig.io.pop_event(event)) {
+    if (event.kind == kind && event.node == node) found.push_back(event);
+  }
+  return found;
+}
+
+TEST(CanopenIo, ARebootedDriveIsConfiguredAgainByTheCycleAndReturns) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  const OutputImage out = all_drives(true, 0.3F);
+  for (int i = 0; i < 10; ++i) rig.scan(out);
+  auto& drive = rig.drive(DriveId::kCentring);
+  const std::size_t slot = index(DriveId::kCentring);
+  // A power cycle (or the drive's own watchdog reset): every object back to its default, so
+  // the drive no longer watches the master and maps nothing; a boot-up message follows.
+  drive.power_cycle();
+  ASSERT_EQ(drive.value(0x1016, 1), 0U);
+  bool faulted = false;
+  int scans = 0;
+  for (; scans < 200; ++scans) {
+    rig.scan(out);
+    faulted = faulted || rig.in.drives[slot].fault;
+    if (faulted && rig.in.drives[slot].ready && !rig.in.drives[slot].fault) break;
+  }
+  ASSERT_TRUE(faulted) << "the reboot was not seen";
+  ASSERT_LT(scans, 200) << "the drive did not return within 2 s";
+  // One SDO transfer per scan: the drive's 36 steps (device type, 4 objects, 4 PDOs of 6 or 7
+  // writes, mode and 2 ramps, mode read back), then its NMT start, its first operational
+  // heartbeat (50 ms) and the enable sequence.
+  EXPECT_LT(scans, 36 + 20) << scans;
+  EXPECT_EQ(rig.io.counters().nodes_reconfigured, 1U);
+  EXPECT_EQ(rig.io.counters().reconfigurations_failed, 0U);
+  // The start-up's configuration is back: the master's heartbeat watched (node 127, 150 ms,
+  // can.yaml's master block) with quick stop on its loss, the PDOs mapped, profile velocity.
+  EXPECT_EQ(drive.value(0x1016, 1), (127U << 16U) | 150U);
+  EXPECT_EQ(drive.value(0x6007, 0), 3U);
+  EXPECT_EQ(drive.value(0x1600, 0), 2U);
+  EXPECT_EQ(drive.value(0x1400, 1), rig.config.drives[slot].rpdo1_cob_id);
+  EXPECT_EQ(drive.state().mode, 3);
+  EXPECT_EQ(drive.nmt_state(), NmtState::kOperational);
+  EXPECT_FALSE(rig.io.drive_status(DriveId::kCentring).rebooted);
+  EXPECT_EQ(drive.state().target_velocity, 3000);  // 0.3 m/s * 10000: it runs on the RPDOs
+  const NodeId id = rig.config.drives[slot].node_id;
+  CanopenEvent boot_up;
+  CanopenEvent event;
+  std::vector<CanopenEventKind> kinds;
+  while (rig.io.pop_event(event)) {
+    if (event.node != id) continue;
+    kinds.push_back(event.kind);
+    if (event.kind == CanopenEventKind::kBootUp) boot_up = event;
+  }
+  ASSERT_NE(std::find(kinds.begin(), kinds.end(), CanopenEventKind::kBootUp), kinds.end());
+  EXPECT_EQ(fault_transition(boot_up), std::optional<bool>(true));  // not the master's doing
+  const auto reconfigured = std::find(kinds.begin(), kinds.end(), CanopenEventKind::kReconfigured);
+  ASSERT_NE(reconfigured, kinds.end());
+  EXPECT_EQ(fault_transition(CanopenEvent{CanopenEventKind::kReconfigured, id}),
+            std::optional<bool>(false));
+  // No other drive noticed.
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    if (d == slot) continue;
+    EXPECT_TRUE(rig.in.drives[d].ready && !rig.in.drives[d].fault) << d;
+  }
+
+  // Configured again means watching the master again: a dead controller stops it too.
+  int silent_scans = 0;
+  for (; silent_scans < 30 && drive.state().state != cia402::State::kQuickStopActive;
+       ++silent_scans) {
+    rig.advance(LoopbackRig::kCycleNs);
+  }
+  EXPECT_EQ(drive.state().state, cia402::State::kQuickStopActive);
+}
+
+TEST(CanopenIo, ARebootedModuleThatRefusesItsConfigurationStaysOutAndSaysWhere) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  const OutputImage out = all_drives(true, 0.3F);
+  for (int i = 0; i < 5; ++i) rig.scan(out);
+  ASSERT_TRUE(rig.in.estop_ok);
+  // The stations module comes back from its reboot as another build whose RPDO mapping is
+  // fixed: the master's write of 0x1600:00 is refused.
+  auto& module = *rig.modules[index(IoModuleId::kStations)];
+  module.fix_mapping(0x1600, {{{{0x6200, 1, 8}}}, 1});
+  module.power_cycle();
+  for (int i = 0; i < 100; ++i) rig.scan(out);
+  const NodeId id = rig.config.io_modules[index(IoModuleId::kStations)].node_id;
+  const std::vector<CanopenEvent> failed =
+      events_of(rig, CanopenEventKind::kReconfigurationFailed, id);
+  ASSERT_EQ(failed.size(), 1U);
+  EXPECT_EQ(failed[0].code, 0x160000U);  // 0x1600:00, the mapping's entry count
+  EXPECT_EQ(static_cast<ReconfigurationFailure>(failed[0].detail),
+            ReconfigurationFailure::kAborted);
+  EXPECT_EQ(fault_transition(failed[0]), std::optional<bool>(true));
+  EXPECT_NE(describe(failed[0]).find("0x1600:0x00: the device aborted"), std::string::npos)
+      << describe(failed[0]);
+  EXPECT_EQ(rig.io.counters().reconfigurations_failed, 1U);
+  EXPECT_EQ(rig.io.counters().nodes_reconfigured, 0U);
+  // Not started half configured: it stays pre-operational and out, and the safety chain
+  // reads open, so the line logic keeps every drive disabled.
+  EXPECT_TRUE(rig.io.io_status(IoModuleId::kStations).rebooted);
+  EXPECT_NE(module.nmt_state(), NmtState::kOperational);
+  EXPECT_FALSE(rig.in.estop_ok);
+}
+
 // The controller dies (or its scan hangs) with the belts running: nothing more comes from the
 // master, not even its heartbeat. Every device was told at start-up to watch that heartbeat,
 // so each stops on its own within the consumer time: drives quick-stop, modules switch their

@@ -116,6 +116,39 @@ TEST(CanopenLine, DriveThatTripsStopsTheLineWithinTwoScans) {
   EXPECT_EQ(line.rig.io.drive_status(DriveId::kMultilane1Left).emcy_code, 0x7121);
 }
 
+// A drive that reboots mid-run (a power dip, its watchdog) comes back with none of the
+// start-up's configuration. The line stops in the scan that reads its boot-up; the master
+// configures it again from the cycle, and after the operator's acknowledgement the line
+// starts with every drive, this one included.
+TEST(CanopenLine, DriveThatRebootsStopsTheLineAndIsConfiguredAgainForTheRestart) {
+  LineOnCan line;
+  line.start_line();
+  auto& takt = line.rig.drive(DriveId::kTakt);
+  takt.power_cycle();
+  bool stopped = false;
+  for (int i = 0; i < 2 && !stopped; ++i) {  // the boot-up goes out with the next bus step
+    line.scan();
+    stopped = line.out.state == LineState::kFault;
+  }
+  ASSERT_TRUE(stopped);
+  line.expect_line_stopped_this_scan();
+  // 36 SDO transfers, one per scan, then NMT start: within a second.
+  for (int i = 0; i < 100 && line.rig.io.counters().nodes_reconfigured == 0; ++i) line.scan();
+  ASSERT_EQ(line.rig.io.counters().nodes_reconfigured, 1U);
+  EXPECT_EQ(line.controller.state(), LineState::kFault);  // nothing restarts by itself
+  // Its first operational heartbeat (50 ms), then the operator.
+  for (int i = 0; i < 10; ++i) line.scan();
+  line.controller.acknowledge_faults();
+  line.scan();
+  ASSERT_EQ(line.controller.state(), LineState::kStopped) << line.out.active_faults;
+  line.controller.request_start();
+  for (int i = 0; i < 20 && line.controller.state() != LineState::kRunning; ++i) line.scan();
+  ASSERT_EQ(line.controller.state(), LineState::kRunning) << line.out.active_faults;
+  EXPECT_EQ(takt.state().state, cia402::State::kOperationEnabled);
+  EXPECT_EQ(takt.nmt_state(), canopen::NmtState::kOperational);
+  EXPECT_EQ(takt.value(0x6007, 0), 3U);  // quick stop when the master falls silent, again
+}
+
 // Bus off: every drive faulted and the safety chain open in the read that sees the error
 // state; the controller disables every drive in the same scan.
 TEST(CanopenLine, BusOffDisablesEveryDriveInTheSameScan) {

@@ -17,8 +17,10 @@
 //   module read as their safe values (no beam, no buttons), so the logic disables every drive.
 // A drive fault is reset (controlword 0x80 edge) only while the operator's fault reset
 // button is pressed: the same acknowledgement the line's state machine needs.
-// A node that rebooted (boot-up message while running) stays faulted until start_up()
-// runs again: its SDO configuration was lost with the reboot.
+// A node that rebooted while running (a boot-up message: power cycle, watchdog reset) lost
+// its SDO configuration. It is faulted until the cycle has configured it again with the
+// start-up's own steps, one SDO transfer per write(), and started it (CiA 302's "boot slave"
+// after a boot-up). A failed step leaves it faulted until its next boot-up or start_up().
 #pragma once
 
 #include <array>
@@ -47,8 +49,21 @@ enum class CanopenEventKind : std::uint8_t {
   kEmergencyCleared,   // EMCY 0x0000
   kDriveStateChanged,  // CiA 402 state, from the statusword
   kBusStateChanged,    // transport error state
+  kReconfigured,       // a rebooted node configured again by the cycle and started
+  // The cycle's configuration of a rebooted node stopped: code = index << 8 | subindex of the
+  // step, detail = ReconfigurationFailure.
+  kReconfigurationFailed,
 };
 const char* to_string(CanopenEventKind kind);
+
+enum class ReconfigurationFailure : std::uint8_t {
+  kAborted,     // the device aborted the transfer
+  kTimeout,     // no answer within sdo_timeout_ms
+  kProtocol,    // an answer that does not fit the request
+  kWrongValue,  // a read-back (device type, mode, a built-in mapping) differs
+  kSendFailed,  // the request could not be queued
+};
+const char* to_string(ReconfigurationFailure failure);
 
 struct CanopenEvent {
   CanopenEventKind kind = CanopenEventKind::kHeartbeatLost;
@@ -74,8 +89,10 @@ struct CanopenCounters {
   std::uint64_t events_dropped = 0;    // event ring full: the consumer is too slow
   std::uint64_t send_failures = 0;     // RPDO or SYNC not queued
   std::uint64_t syncs_sent = 0;
-  std::uint64_t heartbeats_sent = 0;  // the master's own
-  std::uint64_t nodes_restarted = 0;  // NMT start sent to a node that fell to pre-operational
+  std::uint64_t heartbeats_sent = 0;     // the master's own
+  std::uint64_t nodes_restarted = 0;     // NMT start sent to a node that fell to pre-operational
+  std::uint64_t nodes_reconfigured = 0;  // rebooted nodes configured again and started
+  std::uint64_t reconfigurations_failed = 0;
   std::uint64_t heartbeats_lost = 0;  // nodes that passed their heartbeat timeout (each time)
 };
 
@@ -105,7 +122,7 @@ struct NodeStatus {
   bool heard = false;  // any heartbeat since start-up
   bool lost = false;   // heartbeat timeout passed
   canopen::NmtState nmt = canopen::NmtState::kBootUp;
-  bool rebooted = false;        // boot-up seen after start-up: needs start_up() again
+  bool rebooted = false;        // boot-up seen after start-up: not configured again yet
   std::uint16_t emcy_code = 0;  // latest EMCY error code (0: none or cleared)
   cia402::State drive_state = cia402::State::kUnknown;  // drives only
 };
@@ -183,6 +200,7 @@ class CanopenIo final : public ProcessIo {
     bool heard = false;
     bool lost = false;
     bool rebooted = false;
+    bool reconfigure_wanted = false;  // rebooted while running: the cycle configures it
     // It reported pre-operational on its own (a device that lost the master's heartbeat, or
     // another communication error): the next write() sends it NMT start (CiA 302's restart of
     // a node after an error control event). Its configuration is kept in pre-operational.
@@ -251,13 +269,36 @@ class CanopenIo final : public ProcessIo {
   [[nodiscard]] NodeStatus status_of(std::size_t slot) const;
   // 0x1016:01 for every device: the master's node id and the consumer time.
   [[nodiscard]] std::uint32_t master_heartbeat_consumer() const;
-  bool configure_drive(SdoClient& sdo, std::size_t drive, std::vector<std::string>& problems);
-  bool configure_io(SdoClient& sdo, std::size_t module, std::vector<std::string>& problems);
-  bool check_pdo_mapping(SdoClient& sdo, canopen::NodeId node, std::uint16_t mapping_index,
-                         const canopen::PdoMapping& mapping, std::vector<std::string>& problems);
-  bool write_pdo(SdoClient& sdo, canopen::NodeId node, std::uint16_t communication_index,
-                 std::uint16_t mapping_index, std::uint32_t cob_id, std::uint8_t transmission_type,
-                 const canopen::PdoMapping& mapping, std::vector<std::string>& problems);
+
+  // One step of a node's SDO configuration: the start-up and the cycle's reconfiguration of a
+  // rebooted node run the same list.
+  struct SetupStep {
+    enum class Kind : std::uint8_t { kWrite, kExpect };
+    Kind kind = Kind::kWrite;
+    canopen::SdoAddress address;
+    std::uint32_t value = 0;           // written, or expected under `mask`
+    std::uint8_t size_bytes = 0;       // kWrite
+    std::uint32_t mask = 0xFFFFFFFFU;  // kExpect
+    const char* mismatch = "";         // kExpect: what another value means
+    // kExpect of a built-in mapping (pdo_mapping.write_to_devices false): the start-up then
+    // reads the device's whole mapping to show both.
+    const canopen::PdoMapping* mapping = nullptr;
+  };
+  // Built once at construction: the cycle allocates nothing.
+  void build_setup_plans();
+  void append_pdo_steps(std::vector<SetupStep>& steps, std::uint16_t communication_index,
+                        std::uint16_t mapping_index, std::uint32_t cob_id,
+                        std::uint8_t transmission_type, const canopen::PdoMapping& mapping) const;
+  // Start-up: the node's steps through the blocking client; a failure goes into `problems`.
+  bool configure_node(SdoClient& sdo, std::size_t slot, std::vector<std::string>& problems);
+  // After a node's steps all passed: the ramps just written are what a ramp-only RPDO
+  // carries now.
+  void node_configured(std::size_t slot);
+  std::string describe_mapping_mismatch(SdoClient& sdo, std::size_t slot, const SetupStep& step);
+  // In write(): the rebooted node's next step, its timeout, its end.
+  void advance_reconfiguration(std::int64_t now_ns);
+  void take_reconfiguration_response(const CanFrame& frame, std::int64_t now_ns);
+  void end_reconfiguration(std::int64_t now_ns, std::optional<ReconfigurationFailure> failure);
 
   CanBus& bus_;
   CanConfig config_;
@@ -269,6 +310,16 @@ class CanopenIo final : public ProcessIo {
   std::array<NodeRuntime, kNodeCount> nodes_{};  // drives first, then I/O modules
   std::array<DriveRuntime, kDriveCount> drives_{};
   std::array<IoRuntime, kIoModuleCount> io_{};
+  std::array<std::vector<SetupStep>, kNodeCount> setup_plans_;
+  // The rebooted node the cycle is configuring: one transfer in flight at most.
+  struct Reconfiguration {
+    bool active = false;
+    std::size_t slot = 0;
+    std::size_t step = 0;
+    bool awaiting = false;
+    std::int64_t sent_ns = 0;
+  };
+  Reconfiguration reconfiguration_;
   std::array<CanFrame, kReceiveBatch> receive_buffer_{};
   std::array<CanSendConfirmation, kReceiveBatch> confirmation_buffer_{};
   std::int64_t last_sync_sent_ns_ = 0;  // 0: no SYNC confirmed yet
