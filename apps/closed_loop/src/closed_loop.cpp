@@ -1,5 +1,6 @@
 #include "fl/apps/closed_loop.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -142,10 +143,19 @@ Kpis run_closed_loop(const LineConfig& config, Plant& plant, const RunOptions& o
       const auto now = std::chrono::steady_clock::now();
       const double second_wall_s = std::chrono::duration<double>(now - second_start).count();
       second_start = now;
+      const std::uint64_t on_line = plant.fillets_on_line();
+      auto load = std::lower_bound(
+          kpis.pace_by_load.begin(), kpis.pace_by_load.end(), on_line,
+          [](const Kpis::PaceAtLoad& entry, std::uint64_t n) { return entry.fillets_on_line < n; });
+      if (load == kpis.pace_by_load.end() || load->fillets_on_line != on_line) {
+        load = kpis.pace_by_load.insert(load, Kpis::PaceAtLoad{on_line, 0, 0.0});
+      }
+      ++load->seconds;
+      load->wall_s += second_wall_s;
       if (second_wall_s > slowest_second_wall_s) {
         slowest_second_wall_s = second_wall_s;
         kpis.slowest_second_at_s = static_cast<double>(scan + 1 - scans_per_second) * period_s;
-        kpis.slowest_second_fillets_on_line = plant.fillets_on_line();
+        kpis.slowest_second_fillets_on_line = on_line;
       }
     }
     if (options.progress && scan % scans_per_second == 0) {
@@ -229,6 +239,15 @@ nlohmann::json to_json(const Kpis& kpis) {
                               {"at_s", kpis.slowest_second_at_s},
                               {"fillets_on_line", kpis.slowest_second_fillets_on_line}};
   }
+  if (!kpis.pace_by_load.empty()) {
+    nlohmann::json pace = nlohmann::json::array();
+    for (const Kpis::PaceAtLoad& load : kpis.pace_by_load) {
+      pace.push_back({{"fillets_on_line", load.fillets_on_line},
+                      {"seconds", load.seconds},
+                      {"realtime_factor", load.realtime_factor()}});
+    }
+    json["pace_by_fillets_on_line"] = std::move(pace);
+  }
   return json;
 }
 
@@ -255,6 +274,14 @@ std::string format_kpis(const Kpis& kpis) {
     text << "slowest second  " << kpis.slowest_second_realtime_factor << "x real time, from "
          << kpis.slowest_second_at_s << " s of line time with "
          << kpis.slowest_second_fillets_on_line << " fillets on the line\n";
+    // The fullest loads, where the pace matters: the top three seen.
+    text << "pace by load   ";
+    const std::size_t shown = std::min<std::size_t>(3, kpis.pace_by_load.size());
+    for (std::size_t i = kpis.pace_by_load.size() - shown; i < kpis.pace_by_load.size(); ++i) {
+      const Kpis::PaceAtLoad& load = kpis.pace_by_load[i];
+      text << " " << load.fillets_on_line << " fillets " << load.realtime_factor() << "x ("
+           << load.seconds << " s)" << (i + 1 < kpis.pace_by_load.size() ? "," : "\n");
+    }
     text.precision(1);
   }
   text << "throughput      " << kpis.placed_per_minute << " placed/min, " << kpis.items_per_minute

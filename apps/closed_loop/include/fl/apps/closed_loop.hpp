@@ -7,6 +7,7 @@
 #include <functional>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
+#include <vector>
 
 #include "fl/controller/cycle_stats.hpp"
 #include "fl/controller/ledger.hpp"
@@ -64,6 +65,18 @@ struct Kpis {
   double slowest_second_realtime_factor = 0.0;
   double slowest_second_at_s = 0.0;                  // line time at the start of that second
   std::uint64_t slowest_second_fillets_on_line = 0;  // on the belts at its end
+  // The pace against the load (lock-step runs): every whole second of line time, grouped by
+  // the fillets on the belts at its end. A twin's cost grows with what it carries, so the
+  // factor at the fullest line is the one hardware-in-the-loop has to meet.
+  struct PaceAtLoad {
+    std::uint64_t fillets_on_line = 0;
+    std::uint64_t seconds = 0;  // whole seconds of line time that ended with this many
+    double wall_s = 0.0;        // their wall time together
+    [[nodiscard]] double realtime_factor() const {
+      return wall_s > 0.0 ? static_cast<double>(seconds) / wall_s : 0.0;
+    }
+  };
+  std::vector<PaceAtLoad> pace_by_load;  // ascending fillets_on_line, only loads seen
 
   TruthTally truth;
   double placed_per_minute = 0.0;  // fillets placed at the outfeed per minute of feeding
