@@ -33,3 +33,12 @@ if(FL_BUILD_TESTS)
                          DISCOVERY_TIMEOUT 60 PROPERTIES LABELS slow TIMEOUT 300)
   endif()
 endif()
+
+# The DEM line's pace at a steady load of spawned fillets (docs/benchmarks.md, "The DEM line
+# against the controller"): a scenario command timed as a whole, not a unit test.
+if(FL_BUILD_BENCH)
+  add_executable(dem_line_load ${CMAKE_CURRENT_LIST_DIR}/bench/dem_line_load.cpp)
+  target_link_libraries(dem_line_load PRIVATE fl_twin_dem_plant fl_controller_config
+                                              CLI11::CLI11 fl_build_flags)
+  target_compile_definitions(dem_line_load PRIVATE FL_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
+endif()
