@@ -437,6 +437,9 @@ int control_over_can(ControlParts& parts) {
                    {"malformed_frames", counts.malformed_frames},
                    {"events_dropped", counts.events_dropped},
                    {"nodes_lost", counts.heartbeats_lost},
+                   {"nodes_restarted", counts.nodes_restarted},
+                   {"nodes_reconfigured", counts.nodes_reconfigured},
+                   {"reconfigurations_failed", counts.reconfigurations_failed},
                    {"error_state", drivers::to_string(bus->error_state())}};
     const drivers::CanBusTiming& timing = master.bus_timing();
     json["can"]["on_the_wire"] = {
