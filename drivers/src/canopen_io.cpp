@@ -91,7 +91,7 @@ std::string describe(const CanopenEvent& event) {
     case CanopenEventKind::kReconfigurationFailed:
       text += " at " + hex_text(event.code >> 8U, 4) + ":" + hex_text(event.code & 0xFFU, 2) +
               ": " + to_string(static_cast<ReconfigurationFailure>(event.detail)) +
-              " (the node stays out until its next boot-up or start-up)";
+              " (the node stays out; tried again every second)";
       break;
     default:
       break;
@@ -316,6 +316,8 @@ void CanopenIo::handle_frame(const CanFrame& frame, std::int64_t now_ns) {
         node.rebooted = true;
         if (!nmt_commanded_) {
           node.reconfigure_wanted = true;
+          node.reconfigure_not_before_ns = 0;
+          node.failed_before = false;  // a new boot: its failures are news again
           if (reconfiguration_.active && reconfiguration_.slot == entry.slot) {
             reconfiguration_ = Reconfiguration{};
           }
@@ -929,6 +931,7 @@ void CanopenIo::advance_reconfiguration(std::int64_t now_ns) {
     // The lowest slot first: drives before modules, as at start-up.
     for (std::size_t slot = 0; slot < kNodeCount; ++slot) {
       if (!nodes_[slot].reconfigure_wanted) continue;
+      if (now_ns < nodes_[slot].reconfigure_not_before_ns) continue;
       nodes_[slot].reconfigure_wanted = false;
       reconfiguration_ = Reconfiguration{true, slot, 0, false, 0};
       break;
@@ -997,11 +1000,20 @@ void CanopenIo::end_reconfiguration(std::int64_t now_ns,
   NodeRuntime& node = nodes_[run.slot];
   if (failure) {
     const SdoAddress address = setup_plans_[run.slot][run.step].address;
+    const std::uint32_t code = (std::uint32_t{address.index} << 8U) | address.subindex;
+    const auto reason = static_cast<std::uint8_t>(*failure);
     ++counters_.reconfigurations_failed;
-    push_event(CanopenEventKind::kReconfigurationFailed, node.id, now_ns,
-               (std::uint32_t{address.index} << 8U) | address.subindex,
-               static_cast<std::uint8_t>(*failure));
+    if (!node.failed_before || node.last_failure_code != code ||
+        node.last_failure_reason != reason) {
+      push_event(CanopenEventKind::kReconfigurationFailed, node.id, now_ns, code, reason);
+    }
+    node.failed_before = true;
+    node.last_failure_code = code;
+    node.last_failure_reason = reason;
+    node.reconfigure_wanted = true;
+    node.reconfigure_not_before_ns = now_ns + kReconfigureRetryNs;
   } else {
+    node.failed_before = false;
     node_configured(run.slot);
     node.rebooted = false;
     node.start_wanted = true;  // this write() sends it NMT start

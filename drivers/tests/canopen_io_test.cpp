@@ -472,6 +472,38 @@ TEST(CanopenIo, ARebootedDriveIsConfiguredAgainByTheCycleAndReturns) {
   EXPECT_EQ(drive.state().state, cia402::State::kQuickStopActive);
 }
 
+TEST(CanopenIo, ARebootedDriveThatAnswersLateIsConfiguredAtTheNextTry) {
+  LoopbackRig rig;
+  ASSERT_TRUE(rig.start(true).ok);
+  const OutputImage out = all_drives(true, 0.3F);
+  for (int i = 0; i < 5; ++i) rig.scan(out);
+  auto& drive = rig.drive(DriveId::kGuide);
+  const NodeId id = rig.config.drives[index(DriveId::kGuide)].node_id;
+  drive.power_cycle();
+  rig.scan(out);  // its boot-up goes out at the end of this scan
+  // Still initialising: it answers nothing for half a second, past the 100 ms SDO timeout.
+  drive.set_silent(true);
+  rig.scan(out);  // the boot-up is read, the first request goes out unanswered
+  ASSERT_TRUE(rig.io.drive_status(DriveId::kGuide).rebooted);
+  for (int i = 0; i < 49; ++i) rig.scan(out);
+  drive.set_silent(false);
+  const std::vector<CanopenEvent> failed =
+      events_of(rig, CanopenEventKind::kReconfigurationFailed, id);
+  ASSERT_EQ(failed.size(), 1U);
+  EXPECT_EQ(failed[0].code, 0x100000U);  // the first step: the device type, 0x1000:00
+  EXPECT_EQ(static_cast<ReconfigurationFailure>(failed[0].detail),
+            ReconfigurationFailure::kTimeout);
+  // The next try, a second after the failure, configures it; then it is started.
+  int scans = 0;
+  for (; scans < 200 && rig.io.counters().nodes_reconfigured == 0; ++scans) rig.scan(out);
+  ASSERT_EQ(rig.io.counters().nodes_reconfigured, 1U);
+  EXPECT_GT(scans, 40);  // not before the second had passed (0.5 s of it already had)
+  for (int i = 0; i < 20; ++i) rig.scan(out);
+  EXPECT_FALSE(rig.io.drive_status(DriveId::kGuide).rebooted);
+  EXPECT_EQ(drive.nmt_state(), NmtState::kOperational);
+  EXPECT_EQ(drive.value(0x1016, 1), (127U << 16U) | 150U);
+}
+
 TEST(CanopenIo, ARebootedModuleThatRefusesItsConfigurationStaysOutAndSaysWhere) {
   LoopbackRig rig;
   ASSERT_TRUE(rig.start(true).ok);
@@ -483,7 +515,8 @@ TEST(CanopenIo, ARebootedModuleThatRefusesItsConfigurationStaysOutAndSaysWhere) 
   auto& module = *rig.modules[index(IoModuleId::kStations)];
   module.fix_mapping(0x1600, {{{{0x6200, 1, 8}}}, 1});
   module.power_cycle();
-  for (int i = 0; i < 100; ++i) rig.scan(out);
+  // 2.5 s: the first try and two more, a second apart.
+  for (int i = 0; i < 250; ++i) rig.scan(out);
   const NodeId id = rig.config.io_modules[index(IoModuleId::kStations)].node_id;
   const std::vector<CanopenEvent> failed =
       events_of(rig, CanopenEventKind::kReconfigurationFailed, id);
@@ -494,7 +527,8 @@ TEST(CanopenIo, ARebootedModuleThatRefusesItsConfigurationStaysOutAndSaysWhere) 
   EXPECT_EQ(fault_transition(failed[0]), std::optional<bool>(true));
   EXPECT_NE(describe(failed[0]).find("0x1600:0x00: the device aborted"), std::string::npos)
       << describe(failed[0]);
-  EXPECT_EQ(rig.io.counters().reconfigurations_failed, 1U);
+  // Tried again every second, the same refusal each time: counted, reported once.
+  EXPECT_EQ(rig.io.counters().reconfigurations_failed, 3U);
   EXPECT_EQ(rig.io.counters().nodes_reconfigured, 0U);
   // Not started half configured: it stays pre-operational and out, and the safety chain
   // reads open, so the line logic keeps every drive disabled.

@@ -20,7 +20,8 @@
 // A node that rebooted while running (a boot-up message: power cycle, watchdog reset) lost
 // its SDO configuration. It is faulted until the cycle has configured it again with the
 // start-up's own steps, one SDO transfer per write(), and started it (CiA 302's "boot slave"
-// after a boot-up). A failed step leaves it faulted until its next boot-up or start_up().
+// after a boot-up). A failed step leaves it faulted and is tried again every second
+// (kReconfigureRetryNs) until it passes, the node boots again or start_up() runs.
 #pragma once
 
 #include <array>
@@ -177,6 +178,9 @@ class CanopenIo final : public ProcessIo {
   // more than five times one cycle's configured traffic).
   static constexpr std::size_t kMaxBatchesPerRead = 8;
   static constexpr std::size_t kEventCapacity = 256;
+  // A rebooted node whose configuration failed is tried again after this long: a device that
+  // answered late or was still initialising is configured at the next try.
+  static constexpr std::int64_t kReconfigureRetryNs = 1'000'000'000;
 
  private:
   static constexpr std::size_t kNodeCount = kDriveCount + kIoModuleCount;
@@ -200,7 +204,12 @@ class CanopenIo final : public ProcessIo {
     bool heard = false;
     bool lost = false;
     bool rebooted = false;
-    bool reconfigure_wanted = false;  // rebooted while running: the cycle configures it
+    bool reconfigure_wanted = false;             // rebooted while running: the cycle configures it
+    std::int64_t reconfigure_not_before_ns = 0;  // a failed try waits kReconfigureRetryNs
+    // The last failed try's step and reason: a repeat of it is counted, not reported again.
+    std::uint32_t last_failure_code = 0;
+    std::uint8_t last_failure_reason = 0;
+    bool failed_before = false;
     // It reported pre-operational on its own (a device that lost the master's heartbeat, or
     // another communication error): the next write() sends it NMT start (CiA 302's restart of
     // a node after an error control event). Its configuration is kept in pre-operational.
