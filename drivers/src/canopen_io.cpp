@@ -317,7 +317,7 @@ void CanopenIo::handle_frame(const CanFrame& frame, std::int64_t now_ns) {
         if (!nmt_commanded_) {
           node.reconfigure_wanted = true;
           node.reconfigure_not_before_ns = 0;
-          node.failed_before = false;  // a new boot: its failures are news again
+          node.last_failure.reset();  // a new boot: its failures are news again
           if (reconfiguration_.active && reconfiguration_.slot == entry.slot) {
             reconfiguration_ = Reconfiguration{};
           }
@@ -787,6 +787,10 @@ void CanopenIo::build_setup_plans() {
                         std::uint8_t size) {
     steps.push_back({Kind::kWrite, address, value, size});
   };
+  const auto expect = [](std::vector<SetupStep>& steps, SdoAddress address, std::uint32_t value,
+                         std::uint32_t mask, const char* mismatch) {
+    steps.push_back({Kind::kExpect, address, value, 0, mask, mismatch});
+  };
   for (std::size_t d = 0; d < kDriveCount; ++d) {
     const DriveNodeConfig& node = config_.drives[d];
     const DrivePdoMappings& pdos = config_.drive_pdos;
@@ -800,12 +804,8 @@ void CanopenIo::build_setup_plans() {
     // Watch the master's heartbeat and quick-stop (0x6007 = 3) at the rated deceleration when
     // it falls silent: a dead controller must not leave a belt running.
     constexpr std::uint32_t kQuickStopOnLoss = 3;
-    steps.push_back({Kind::kExpect,
-                     {0x1000, 0},
-                     kDriveProfile,
-                     0,
-                     kDeviceProfileMask,
-                     "device type (0x1000) is not a CiA 402 drive"});
+    expect(steps, {0x1000, 0}, kDriveProfile, kDeviceProfileMask,
+           "device type (0x1000) is not a CiA 402 drive");
     write(steps, {0x1017, 0}, node.heartbeat_producer_ms, 2);
     write(steps, {0x1016, 1}, master_heartbeat_consumer(), 4);
     write(steps, {0x6007, 0}, kQuickStopOnLoss, 2);
@@ -819,22 +819,14 @@ void CanopenIo::build_setup_plans() {
     write(steps, {0x6060, 0}, kProfileVelocityMode, 1);
     write(steps, {0x6083, 0}, max_accel, 4);
     write(steps, {0x6084, 0}, max_accel, 4);
-    steps.push_back({Kind::kExpect,
-                     {0x6061, 0},
-                     kProfileVelocityMode,
-                     0,
-                     0xFFU,
-                     "mode of operation display (0x6061) is not profile velocity (3)"});
+    expect(steps, {0x6061, 0}, kProfileVelocityMode, 0xFFU,
+           "mode of operation display (0x6061) is not profile velocity (3)");
   }
   for (std::size_t m = 0; m < kIoModuleCount; ++m) {
     const IoModuleConfig& node = config_.io_modules[m];
     std::vector<SetupStep>& steps = setup_plans_[kDriveCount + m];
-    steps.push_back({Kind::kExpect,
-                     {0x1000, 0},
-                     kIoProfile,
-                     0,
-                     kDeviceProfileMask,
-                     "device type (0x1000) is not a CiA 401 I/O module"});
+    expect(steps, {0x1000, 0}, kIoProfile, kDeviceProfileMask,
+           "device type (0x1000) is not a CiA 401 I/O module");
     // Watch the master's heartbeat; when it falls silent every digital output goes off (flip
     // plates back, roller up, lamps off) and every analogue output to 0 (hopper gate closed,
     // leveller and centring shift at rest).
@@ -900,7 +892,7 @@ bool CanopenIo::configure_node(SdoClient& sdo, std::size_t slot,
           " failed: " + result.describe());
       return false;
     }
-    if (!writing && (result.value & step.mask) != step.value) {
+    if (!writing && !step.accepts(result.value)) {
       problems.push_back(step.mapping != nullptr ? describe_mapping_mismatch(sdo, slot, step)
                                                  : node_label(slot) + ": " + step.mismatch +
                                                        ": reads " + hex_text(result.value, 8));
@@ -987,7 +979,7 @@ void CanopenIo::take_reconfiguration_response(const CanFrame& frame, std::int64_
     end_reconfiguration(now_ns, ReconfigurationFailure::kProtocol);
     return;
   }
-  if (!writing && (response.value & step.mask) != step.value) {
+  if (!writing && !step.accepts(response.value)) {
     end_reconfiguration(now_ns, ReconfigurationFailure::kWrongValue);
     return;
   }
@@ -1003,17 +995,15 @@ void CanopenIo::end_reconfiguration(std::int64_t now_ns,
     const std::uint32_t code = (std::uint32_t{address.index} << 8U) | address.subindex;
     const auto reason = static_cast<std::uint8_t>(*failure);
     ++counters_.reconfigurations_failed;
-    if (!node.failed_before || node.last_failure_code != code ||
-        node.last_failure_reason != reason) {
+    const NodeRuntime::FailedTry failed{code, reason};
+    if (node.last_failure != failed) {
       push_event(CanopenEventKind::kReconfigurationFailed, node.id, now_ns, code, reason);
     }
-    node.failed_before = true;
-    node.last_failure_code = code;
-    node.last_failure_reason = reason;
+    node.last_failure = failed;
     node.reconfigure_wanted = true;
     node.reconfigure_not_before_ns = now_ns + kReconfigureRetryNs;
   } else {
-    node.failed_before = false;
+    node.last_failure.reset();
     node_configured(run.slot);
     node.rebooted = false;
     node.start_wanted = true;  // this write() sends it NMT start

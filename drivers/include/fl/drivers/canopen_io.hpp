@@ -206,10 +206,14 @@ class CanopenIo final : public ProcessIo {
     bool rebooted = false;
     bool reconfigure_wanted = false;             // rebooted while running: the cycle configures it
     std::int64_t reconfigure_not_before_ns = 0;  // a failed try waits kReconfigureRetryNs
-    // The last failed try's step and reason: a repeat of it is counted, not reported again.
-    std::uint32_t last_failure_code = 0;
-    std::uint8_t last_failure_reason = 0;
-    bool failed_before = false;
+    // The last failed try's step (index << 8 | subindex) and reason, since the node's boot-up:
+    // a repeat of it is counted, not reported again.
+    struct FailedTry {
+      std::uint32_t code = 0;
+      std::uint8_t reason = 0;
+      friend bool operator==(const FailedTry&, const FailedTry&) = default;
+    };
+    std::optional<FailedTry> last_failure;
     // It reported pre-operational on its own (a device that lost the master's heartbeat, or
     // another communication error): the next write() sends it NMT start (CiA 302's restart of
     // a node after an error control event). Its configuration is kept in pre-operational.
@@ -292,6 +296,10 @@ class CanopenIo final : public ProcessIo {
     // kExpect of a built-in mapping (pdo_mapping.write_to_devices false): the start-up then
     // reads the device's whole mapping to show both.
     const canopen::PdoMapping* mapping = nullptr;
+    // A kExpect step's read-back passes (the start-up and the cycle judge alike).
+    [[nodiscard]] bool accepts(std::uint32_t read_value) const {
+      return (read_value & mask) == value;
+    }
   };
   // Built once at construction: the cycle allocates nothing.
   void build_setup_plans();
