@@ -19,6 +19,7 @@
 #include <random>
 #include <string>
 
+#include "../tests/plant_test_support.hpp"  // belts_running: the belts as the plants' tests run them
 #include "fl/controller/config_loader.hpp"
 #include "fl/twin/dem_plant/dem_plant.hpp"
 
@@ -26,23 +27,6 @@ namespace {
 
 constexpr std::int64_t kStepNs = 10'000'000;  // the scan period: the plant's control step
 constexpr int kStepsPerSecond = 100;
-
-// Every belt at its section's nominal speed, the right multilane belts with their left ones,
-// the bulk belt still: nothing but the spawned fillets reaches the line.
-fl::OutputImage belts_at_nominal_speed(const fl::LineConfig& line) {
-  fl::OutputImage out{};
-  for (std::size_t d = 0; d < fl::kDriveCount; ++d) {
-    out.drives[d].enable = true;
-    out.drives[d].speed_mps = line.sections[d].nominal_speed_mps;
-  }
-  using fl::DriveId;
-  for (auto [left, right] : {std::pair{DriveId::kMultilane1Left, DriveId::kMultilane1Right},
-                             std::pair{DriveId::kMultilane2Left, DriveId::kMultilane2Right}}) {
-    out.drives[fl::index(right)].speed_mps = out.drives[fl::index(left)].speed_mps;
-  }
-  out.drives[fl::index(DriveId::kBulk)].speed_mps = 0.0F;
-  return out;
-}
 
 }  // namespace
 
@@ -70,7 +54,7 @@ static int checked_main(int argc, char** argv) {
   fl::DemPlant plant(line, config);
   fl::InputImage in{};
   plant.reset(seed, in);
-  const fl::OutputImage out = belts_at_nominal_speed(line);
+  const fl::OutputImage out = fl::test::belts_running(line);
 
   // Spawned on the first transition belt, clear of the barrier: a variant, a side and a
   // heading drawn per fillet; the spacing in time is kept even when a spawn must wait for room.

@@ -1,5 +1,6 @@
 // Scaffolding both plants' tests share (fast/fast_test_support.hpp,
-// dem_plant/dem_plant_test_support.hpp): time steps and an output image that runs the belts.
+// dem_plant/dem_plant_test_support.hpp), and twin/bench/dem_line_load: time steps and an
+// output image that runs the belts.
 #pragma once
 
 #include <cstdint>
