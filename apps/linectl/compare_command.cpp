@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -10,9 +11,11 @@
 #include <optional>
 
 #include "cli_support.hpp"
+#include "fl/controller/config_loader.hpp"
 #include "fl/controller/yaml_reader.hpp"
 #include "fl/report/csv.hpp"
 #include "fl/twin/dem/config.hpp"
+#include "fl/twin/dem_plant/dem_plant_config.hpp"
 #include "fl/workbench/calibrate.hpp"
 #include "fl/workbench/diagnose.hpp"
 #include "fl/workbench/generator.hpp"
@@ -67,6 +70,11 @@ void add_model_options(CLI::App& command, CompareArgs& args) {
   command.add_option("dataset", args.dataset, "dataset folder (docs/measurements.md)")->required();
   command.add_option("--out", args.out, "output folder");
   command.add_option("--dem-config", args.dem_config, "DEM model (default config/dem.yaml)");
+  command.add_option("--line-config", args.line_config,
+                     "line_tracks taken on the line: the line (default config/line.yaml)");
+  command.add_option(
+      "--plant-config", args.plant_config,
+      "line_tracks taken on the line: the DEM plant (default config/plant_dem.yaml)");
   command.add_option("--radius-mm", args.radius_mm, "sub-particle radius of the twin")
       ->check(CLI::Range(3.0, 7.0));
   command.add_option("--threads", args.threads, "engine threads per twin run")
@@ -83,10 +91,34 @@ void add_ensemble_option(CLI::App& command, CompareArgs& args) {
       ->check(CLI::Range(1, 64));
 }
 
+// The line and the DEM plant that line tracks taken on the line replay on; false (reported) when
+// a file is unusable.
+bool load_line_run_configs(const std::string& line_file, const std::string& plant_file,
+                           LineTracksSettings& settings) {
+  const fs::path line = line_file.empty() ? default_config("line.yaml") : fs::path(line_file);
+  const fs::path plant =
+      plant_file.empty() ? default_config("plant_dem.yaml") : fs::path(plant_file);
+  try {
+    settings.line = std::make_shared<const LineConfig>(load_line_config(line));
+    settings.plant = std::make_shared<const DemPlantConfig>(load_dem_plant_config(plant));
+  } catch (const ConfigError& error) {
+    spdlog::error("{}", error.what());
+    return false;
+  }
+  return true;
+}
+
 // The twin settings of the arguments; nullopt (reported) for an ensemble of a dataset that is
-// neither line tracks nor slide.
+// neither line tracks nor slide, or for unusable line or plant files.
 std::optional<TwinSettings> twin_settings(const CompareArgs& args, const Dataset& dataset) {
   TwinSettings settings;
+  const bool on_line =
+      std::any_of(dataset.trials.begin(), dataset.trials.end(),
+                  [](const Trial& trial) { return runs_on_line(trial.conditions); });
+  if (on_line &&
+      !load_line_run_configs(args.line_config, args.plant_config, settings.line_tracks)) {
+    return std::nullopt;
+  }
   if (args.ensemble > 1 && dataset.experiment != ExperimentType::kLineTracks &&
       dataset.experiment != ExperimentType::kSlide) {
     spdlog::error("{}: --ensemble runs line_tracks and slide datasets, and this one is {}",
@@ -161,6 +193,9 @@ CLI::App* add_dataset_subcommand(CLI::App& app, GenerateArgs& args) {
                    "trials (0: the experiment's default; line_tracks: takts of 4 and 7 m/s^2 "
                    "in turn, each dry then wet)")
       ->check(CLI::Range(0, 64));
+  generate->add_flag("--on-line", args.on_line,
+                     "line_tracks: tracks taken on the line (machine: line), replayed on the DEM "
+                     "plant of config/line.yaml and config/plant_dem.yaml");
   generate->add_flag("--truth-from-true-pose", args.truth_starts_at_true_pose,
                      "line_tracks: the truth starts at each fillet's true first pose, which the "
                      "camera sees with noise like any other row (as on a real line)");
@@ -185,6 +220,13 @@ int generate_command(const GenerateArgs& args) {
   options.slide_tilt_rates_deg_per_s = args.slide_tilt_rates_deg_per_s;
   options.slide_relaid = args.slide_relaid;
   options.common.base_spec = dem::load_model_spec(default_config("dem.yaml"));
+  options.line_tracks_on_line = args.on_line;
+  if (args.on_line) {
+    LineTracksSettings line_run;
+    if (!load_line_run_configs({}, {}, line_run)) return 2;
+    options.line_tracks_line = line_run.line;
+    options.line_tracks_plant = line_run.plant;
+  }
   const GeneratedDataset made = generate_dataset(options);
   write_dataset(made.dataset, args.out);
   const std::string truth_file = fs::path(args.out).string() + ".truth.yaml";

@@ -28,7 +28,10 @@ struct CompareArgs {
   std::string dataset;
   std::string out;         // default: compare_<dataset folder name>
   std::string dem_config;  // default: config/dem.yaml
-  double radius_mm = 7.0;  // sub-particle radius of the twin's samples
+  // Line tracks taken on the line (machine: line): the line and the DEM plant they replay on.
+  std::string line_config;   // default: config/line.yaml
+  std::string plant_config;  // default: config/plant_dem.yaml
+  double radius_mm = 7.0;    // sub-particle radius of the twin's samples
   int threads = 1;
   // Twin runs per trial: line tracks from first poses within the noise, slide from
   // placements within the tolerance.
@@ -49,7 +52,8 @@ struct GenerateArgs {
   double position_noise_mm = 1.0;
   int fillets_per_trial = 5;
   bool truth_starts_at_true_pose = false;
-  int trials = 0;  // 0: the experiment's default
+  bool on_line = false;  // line_tracks: on the line's DEM plant (config/line.yaml, plant_dem.yaml)
+  int trials = 0;        // 0: the experiment's default
   std::vector<double> slide_tilt_rates_deg_per_s;
   bool slide_relaid = false;
 };

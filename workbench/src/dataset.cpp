@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "csv_reader.hpp"
+#include "fl/controller/process_image.hpp"
 #include "fl/controller/yaml_reader.hpp"
 #include "text.hpp"
 
@@ -112,6 +113,15 @@ ExperimentSchema make_schema(ExperimentType type) {
                         {"angle", Quantity::kAngle, -2.0 * kPi, 2.0 * kPi, true}};
       schema.conditions.push_back(
           {"belt_speed", Kind::kNumber, Quantity::kSpeed, 0.0, 5.0, {}, false});
+      // Where the tracks were taken: one lab belt, or the line from the takt barrier on (x is
+      // then the line coordinate s, and the command log names every belt and station).
+      schema.conditions.push_back({"machine",
+                                   Kind::kLabel,
+                                   Quantity::kDimensionless,
+                                   0,
+                                   0,
+                                   {std::string_view(kMachineBelt), std::string_view(kMachineLine)},
+                                   false});
       schema.time_ordered = true;
       schema.has_commands = true;
       break;
@@ -223,10 +233,39 @@ bool parse_header_field(std::string_view field, int line, int column, FileProble
   return true;
 }
 
-// Reads one CSV file into a Table: the schema's columns, or (commands) time plus speeds.
+// What a CSV file holds: a trial's data (the schema's columns), a lab belt's command log (time
+// plus speeds of any name) or a line's (time, every belt by its drive name, the stations).
+enum class TableKind : std::uint8_t { kData, kBeltLog, kLineLog };
+
+// The columns of a line's command log: time, the speed of every belt on the product path (all
+// required: a belt left out would run at a guessed speed), the stations' flags and the centring
+// unit's shift (optional: at rest when absent).
+const std::vector<ColumnRule>& line_log_columns() {
+  static const std::vector<ColumnRule> columns = [] {
+    std::vector<ColumnRule> rules{{"time", Quantity::kTime, 0.0, 24.0 * 3600.0, true}};
+    for (std::size_t d = 0; d < kDriveCount; ++d) {
+      if (static_cast<DriveId>(d) == DriveId::kBulk) continue;  // upstream of the path
+      // A belt of the line runs under 5 m/s either way (the reject belt reverses).
+      rules.push_back({kDriveNames[d], Quantity::kSpeed, -5.0, 5.0, true});
+    }
+    for (const std::string_view flag : kLineLogFlags) {
+      rules.push_back({flag, Quantity::kDimensionless, 0.0, 1.0, false});
+    }
+    // The pusher's stroke across a 400 mm belt.
+    rules.push_back({kLineLogCentringShift, Quantity::kLength, -0.2, 0.2, false});
+    return rules;
+  }();
+  return columns;
+}
+
+// Reads one CSV file into a Table: the schema's columns, or a command log.
 std::optional<Table> read_table(const std::filesystem::path& path, const std::string& shown_name,
-                                const ExperimentSchema* schema, bool commands,
+                                const ExperimentSchema* schema, TableKind kind,
                                 std::vector<DatasetProblem>& sink) {
+  const bool commands = kind != TableKind::kData;
+  const std::vector<ColumnRule>* rules = nullptr;
+  if (kind == TableKind::kData) rules = &schema->columns;
+  if (kind == TableKind::kLineLog) rules = &line_log_columns();
   FileProblems problems(sink, shown_name);
   std::vector<detail::CsvRow> rows;
   std::vector<detail::CsvIssue> issues;
@@ -249,10 +288,10 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
     const std::string_view raw = detail::trim(header.fields[c]);
     const std::string_view bare = detail::trim(raw.substr(0, raw.find('[')));
     const ColumnRule* rule = nullptr;
-    if (commands) {
+    if (rules == nullptr) {
       if (bare == "time") rule = &command_time_rule;
     } else {
-      for (const ColumnRule& r : schema->columns) {
+      for (const ColumnRule& r : *rules) {
         if (r.name == bare) rule = &r;
       }
     }
@@ -263,13 +302,15 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
       header_ok = false;
       continue;
     }
-    if (!commands && rule == nullptr) {
+    if (rules != nullptr && rule == nullptr) {
       std::vector<std::string_view> names;
-      for (const ColumnRule& r : schema->columns) names.push_back(r.name);
+      for (const ColumnRule& r : *rules) names.push_back(r.name);
       problems.add(header.line, column,
-                   "unknown column '" + entry.name + "' for a " +
-                       std::string(to_string(schema->type)) +
-                       " dataset (its columns: " + join(names) + ")");
+                   "unknown column '" + entry.name + "' for " +
+                       (kind == TableKind::kLineLog
+                            ? std::string("a line's command log (machine: line)")
+                            : "a " + std::string(to_string(schema->type)) + " dataset") +
+                       " (its columns: " + join(names) + ")");
       header_ok = false;
       continue;
     }
@@ -295,10 +336,10 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
       header_ok = false;
     }
   };
-  if (commands) {
+  if (rules == nullptr) {
     require_column("time");
   } else {
-    for (const ColumnRule& r : schema->columns) {
+    for (const ColumnRule& r : *rules) {
       if (r.required) require_column(r.name);
     }
   }
@@ -344,6 +385,13 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
       }
       const double value_si = value * h.unit.to_si;
       const ColumnRule* rule = h.rule;
+      if (kind == TableKind::kLineLog && rule != nullptr &&
+          rule->quantity == Quantity::kDimensionless && value != 0.0 && value != 1.0) {
+        problems.add(row.line, column,
+                     h.name + ": '" + std::string(cell) + "' is not 0 or 1 (off or on)");
+        row_ok = false;
+        continue;
+      }
       if (rule != nullptr && (value_si < rule->min_si || value_si > rule->max_si)) {
         problems.add(row.line, column,
                      h.name + ": " + std::string(cell) + " " + std::string(h.unit.symbol) +
@@ -485,6 +533,13 @@ std::string_view to_string(ExperimentType type) {
   return "unknown";
 }
 
+bool runs_on_line(const Conditions& conditions) {
+  const auto machine = conditions.find("machine");
+  if (machine == conditions.end()) return false;
+  const auto* label = std::get_if<std::string>(&machine->second);
+  return label != nullptr && *label == kMachineLine;
+}
+
 std::optional<ExperimentType> experiment_from_string(std::string_view name) {
   for (const auto& [value, text] : kExperimentNames) {
     if (text == name) return value;
@@ -622,6 +677,12 @@ Dataset load_dataset(const std::filesystem::path& folder) {
   // A required condition may sit at either level: checked after the merge.
   if (schema != nullptr) {
     for (const RawTrial& trial : raw_trials) {
+      if (runs_on_line(trial.conditions) && trial.commands.empty()) {
+        reader.report_at("trials[" + std::to_string(trial.index) + "]", ProblemKind::kMissingKey,
+                         "trial '" + trial.id +
+                             "' ran on the line (machine: line) and names no command log: give "
+                             "the belts' speeds and the stations as 'commands:'");
+      }
       for (const ConditionRule& rule : schema->conditions) {
         if (rule.required && !trial.conditions.contains(rule.name)) {
           reader.report_at("trials[" + std::to_string(trial.index) + "]", ProblemKind::kMissingKey,
@@ -643,12 +704,14 @@ Dataset load_dataset(const std::filesystem::path& folder) {
       trial.id = raw.id;
       trial.conditions = std::move(raw.conditions);
       const std::filesystem::path file = folder / raw.file;
-      std::optional<Table> data = read_table(
-          file, (std::filesystem::path(shown_folder) / raw.file).string(), schema, false, problems);
+      std::optional<Table> data =
+          read_table(file, (std::filesystem::path(shown_folder) / raw.file).string(), schema,
+                     TableKind::kData, problems);
       if (!raw.commands.empty()) {
-        trial.commands = read_table(folder / raw.commands,
-                                    (std::filesystem::path(shown_folder) / raw.commands).string(),
-                                    schema, true, problems);
+        trial.commands = read_table(
+            folder / raw.commands, (std::filesystem::path(shown_folder) / raw.commands).string(),
+            schema, runs_on_line(trial.conditions) ? TableKind::kLineLog : TableKind::kBeltLog,
+            problems);
       }
       if (data) {
         trial.data = std::move(*data);

@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <fstream>
 #include <memory>
 #include <numbers>
 #include <random>
+#include <set>
 #include <stdexcept>
 #include <string_view>
 #include <utility>
@@ -218,6 +220,77 @@ Trial line_tracks_trial(int k, int fillets, std::mt19937_64& random) {
   return trial;
 }
 
+// Trial k of a line-track dataset taken on the line (GeneratorOptions::line_tracks_on_line):
+// `fillets` fillets appear 0.6 s apart (300 mm on the 0.5 m/s centring belt) at 2900 mm, 100 mm
+// into the centring belt where camera 2 sees them, within 20 mm of the centre line at headings
+// within 30 degrees of either direction, and are tracked every 25 ms (the multilane cameras'
+// rate) for 2.4 s: over both multilane units (3400 to 4200 mm) onto the squeeze belt. Every
+// belt runs at its nominal speed; each multilane unit's two belts differ by 0.16 m/s, the faster
+// side swapping from trial to trial and, over 50 ms, halfway through. Dry then wet.
+Trial line_run_trial(int k, int fillets, std::mt19937_64& random, const LineConfig& line) {
+  constexpr double kFirstSMm = 2900.0, kApartS = 0.6, kTrackedS = 2.4, kFrameS = 0.025;
+  constexpr double kDifferentialMps = 0.16, kSwapS = 0.05;
+  const std::string surface = k % 2 == 0 ? "dry" : "wet";
+  Trial trial;
+  trial.id = "line" + std::to_string(k + 1) + "_" + surface;
+  trial.conditions["surface"] = surface;
+  trial.conditions["variant"] = std::string("172x72x32");
+  trial.conditions["machine"] = std::string(kMachineLine);
+  const double end_s = kApartS * (fillets - 1) + kTrackedS;
+  const double swap_s = 0.5 * end_s;
+  const std::vector<double> times{0.0, swap_s, swap_s + kSwapS, end_s};
+  Table commands;
+  commands.channels.push_back({"time", *find_unit("s"), times});
+  const double first_sign = (k / 2) % 2 == 0 ? 1.0 : -1.0;
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    const auto id = static_cast<DriveId>(d);
+    if (id == DriveId::kBulk) continue;
+    // A unit's right belt runs at its left one's section speed (line_config registers the
+    // section on the left drive).
+    const bool right = id == DriveId::kMultilane1Right || id == DriveId::kMultilane2Right;
+    const bool left = id == DriveId::kMultilane1Left || id == DriveId::kMultilane2Left;
+    // Rounded to the micrometre per second: the config's float, not its binary tail.
+    const double nominal =
+        std::round(static_cast<double>(line.sections[right ? d - 1 : d].nominal_speed_mps) * 1e6) /
+        1e6;
+    std::vector<double> speed(times.size(), nominal);
+    if (left || right) {
+      const double side = left ? 0.5 : -0.5;
+      for (std::size_t row = 0; row < times.size(); ++row) {
+        const double sign = row < 2 ? first_sign : -first_sign;
+        speed[row] = std::round((nominal + side * sign * kDifferentialMps) * 1e6) / 1e6;
+      }
+    }
+    commands.channels.push_back({std::string(kDriveNames[d]), *find_unit("m/s"), speed});
+  }
+  commands.lines.resize(times.size());
+  trial.commands = commands;
+  std::uniform_real_distribution<double> lateral(-0.02, 0.02);
+  std::uniform_real_distribution<double> turn(-std::numbers::pi / 6.0, std::numbers::pi / 6.0);
+  std::vector<double> t, id, x, y, angle;
+  for (int f = 0; f < fillets; ++f) {
+    const double start_s = kApartS * f;
+    const double heading =
+        turn(random) + (std::bernoulli_distribution(0.5)(random) ? std::numbers::pi : 0.0);
+    const double offset = lateral(random);
+    for (int frame = 0; frame * kFrameS <= kTrackedS + 1e-9; ++frame) {
+      const bool first = frame == 0;
+      t.push_back(start_s + frame * kFrameS);
+      id.push_back(static_cast<double>(f + 1));
+      x.push_back(first ? kFirstSMm * 1e-3 : 0.0);
+      y.push_back(first ? offset : 0.0);
+      angle.push_back(first ? heading : 0.0);
+    }
+  }
+  trial.data.channels = {{"time", *find_unit("s"), t},
+                         {"fillet", *find_unit("1"), id},
+                         {"x", *find_unit("mm"), x},
+                         {"y", *find_unit("mm"), y},
+                         {"angle", *find_unit("deg"), angle}};
+  trial.data.lines.resize(t.size());
+  return trial;
+}
+
 // Load to the peak travel over `ramp_s`, hold, unload over `ramp_s`; a row every `row_s`.
 Trial compress_trial(const std::string& id, double ramp_s, double row_s) {
   constexpr double kPeakTravelM = 0.5e-3;  // 1.8 % of the 28 mm block: linear bonds
@@ -407,6 +480,9 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
         "generator: the compress row interval must be above 0 and at most 5 ms, a tenth of the "
         "third trial's 50 ms ramp");
   }
+  if (options.line_tracks_on_line && !tracks) {
+    throw std::invalid_argument("generator: tracks on the line are for line_tracks datasets only");
+  }
   if (options.slide_relaid && !slide) {
     throw std::invalid_argument("generator: re-laying the fillet is for slide datasets only");
   }
@@ -450,7 +526,13 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
   }
   truth_common.base_spec =
       with_experiment_effect(truth_common.base_spec, options.experiment, made.truth);
-  const std::unique_ptr<TrialModel> truth = make_twin_model(options.experiment, truth_common);
+  TwinSettings truth_settings;
+  truth_settings.line_tracks.line = options.line_tracks_line;
+  truth_settings.line_tracks.plant = options.line_tracks_plant;
+  const std::unique_ptr<TrialModel> truth =
+      make_twin_model(options.experiment, truth_common, truth_settings);
+  const LineConfig line =
+      options.line_tracks_line ? *options.line_tracks_line : default_line_config();
 
   Dataset& data = made.dataset;
   data.name = "synthetic " + std::string(to_string(options.experiment)) + ", seed " +
@@ -490,7 +572,9 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
     } else if (bend) {
       trial = bend_trial(k, options.repetitions);
     } else if (tracks) {
-      trial = line_tracks_trial(k, options.fillets_per_trial, random);
+      trial = options.line_tracks_on_line
+                  ? line_run_trial(k, options.fillets_per_trial, random, line)
+                  : line_tracks_trial(k, options.fillets_per_trial, random);
     } else {
       trial = compress_trial("rate" + std::to_string(k + 1), 0.2 / std::pow(2.0, k),
                              options.compress_row_s);
@@ -498,9 +582,15 @@ GeneratedDataset generate_dataset(const GeneratorOptions& options) {
     if (tracks) {
       // A fillet's first row is where the camera first saw it, noise and all: the truth starts
       // there (as any twin must), its later rows are the truth's answer plus noise.
-      const std::vector<double>& time = trial.data.at("time").values_si;
+      // Each fillet's first row in the file is where the camera first saw it.
+      const std::vector<double>& fillet_of_row = trial.data.at("fillet").values_si;
+      std::vector<bool> first_of_fillet(fillet_of_row.size(), false);
+      std::set<double> seen_fillets;
+      for (std::size_t row = 0; row < fillet_of_row.size(); ++row) {
+        first_of_fillet[row] = seen_fillets.insert(fillet_of_row[row]).second;
+      }
       std::normal_distribution<double> angle_noise(0.0, track_angle_noise_si);
-      const auto first_row = [&time](std::size_t row) { return time[row] == time.front(); };
+      const auto first_row = [&first_of_fillet](std::size_t row) { return first_of_fillet[row]; };
       const std::array<std::pair<std::size_t, std::normal_distribution<double>*>, 3> noisy{
           {{2, &noise}, {3, &noise}, {4, &angle_noise}}};  // x, y, angle
       // From the true pose, the truth starts clean and every row gets its noise below.

@@ -1,5 +1,7 @@
 #include "fl/workbench/twin_models.hpp"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -13,7 +15,9 @@
 #include <variant>
 
 #include "displacement_path.hpp"
+#include "fl/controller/process_image.hpp"
 #include "fl/twin/dem/config.hpp"
+#include "fl/twin/dem_plant/line_tracks.hpp"
 #include "fl/twin/model_tests/model_tests.hpp"
 
 namespace fl::workbench {
@@ -427,7 +431,8 @@ TwinLineTracksModel::TwinLineTracksModel(model_tests::CommonParams common,
 std::string TwinLineTracksModel::describe() const {
   std::ostringstream text;
   text << "DEM twin, flexible fillets of " << common_.sub_particle_radius_m * 1e3
-       << " mm sub-particles on a commanded belt";
+       << " mm sub-particles on a commanded belt (tracks taken on the line: the line's DEM "
+          "plant replaying its log)";
   if (settings_.ensemble_runs > 1) {
     text << ", mean of " << settings_.ensemble_runs << " runs from first poses within the noise";
   }
@@ -458,13 +463,100 @@ std::string_view line_tracks_channel_without_noise(const Dataset& dataset) {
   return {};
 }
 
+namespace {
+
+double log_value_at(const std::vector<double>& time_s, const std::vector<double>& value,
+                    double at_s, bool linear) {
+  if (at_s <= time_s.front()) return value.front();
+  if (at_s >= time_s.back()) return value.back();
+  const auto after = std::upper_bound(time_s.begin(), time_s.end(), at_s);
+  const auto k = static_cast<std::size_t>(after - time_s.begin());
+  if (!linear) return value[k - 1];
+  const double share = (at_s - time_s[k - 1]) / (time_s[k] - time_s[k - 1]);
+  return value[k - 1] + share * (value[k] - value[k - 1]);
+}
+
+// The line's commands at a time from a line log (dataset.hpp, machine: line): belt speeds
+// linear between rows as logged every scan, stations held from the row before.
+OutputImage line_commands_at(const Table& log, double time_s) {
+  const std::vector<double>& t = log.at("time").values_si;
+  OutputImage out{};
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    if (const Channel* speed = log.find(kDriveNames[d]); speed != nullptr) {
+      out.drives[d].speed_mps = static_cast<float>(log_value_at(t, speed->values_si, time_s, true));
+    }
+  }
+  const auto flag = [&](std::string_view name) {
+    const Channel* channel = log.find(name);
+    return channel != nullptr && log_value_at(t, channel->values_si, time_s, false) > 0.5;
+  };
+  out.flip_plate1_flip = flag(kLineLogFlags[0]);
+  out.flip_plate2_flip = flag(kLineLogFlags[1]);
+  out.centring_stroke = flag(kLineLogFlags[2]);
+  out.squeeze_roller_down = flag(kLineLogFlags[3]);
+  out.final_reject = flag(kLineLogFlags[4]);
+  if (const Channel* shift = log.find(kLineLogCentringShift); shift != nullptr) {
+    out.centring_shift_mm =
+        static_cast<float>(log_value_at(t, shift->values_si, time_s, false) * 1e3);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<model_tests::BeltPose> TwinLineTracksModel::run_on_line(
+    const Trial& trial, const std::vector<model_tests::BeltPose>& first,
+    const std::vector<model_tests::BeltFilletSample>& samples) const {
+  if (!trial.commands) {
+    throw std::runtime_error("trial '" + trial.id +
+                             "' ran on the line and has no command log to replay");
+  }
+  LineTracksRun run;
+  run.line = settings_.line ? *settings_.line : default_line_config();
+  run.plant = settings_.plant ? *settings_.plant : default_dem_plant_config();
+  run.plant.engine = common_.base_spec;
+  keep_wet_film_for_wet_trials(run.plant.engine, trial.conditions);
+  run.plant.simulation.sub_particle_radius_mm =
+      static_cast<float>(common_.sub_particle_radius_m * 1e3);
+  run.plant.simulation.thread_count = common_.thread_count;
+  run.variant = static_cast<std::uint8_t>(fillet_variant(trial.conditions, common_.variant));
+  const Table& log = *trial.commands;
+  run.commands = [&log](double time_s) { return line_commands_at(log, time_s); };
+  // A fillet appears at the time of its first row.
+  std::vector<double> first_time_s(first.size(), -1.0);
+  for (const model_tests::BeltFilletSample& sample : samples) {
+    if (first_time_s[sample.fillet] < 0.0) first_time_s[sample.fillet] = sample.time_s;
+    run.samples.push_back({sample.fillet, sample.time_s});
+  }
+  for (std::size_t f = 0; f < first.size(); ++f) {
+    run.first.push_back(
+        {first_time_s[f], first[f].x_m * 1e3, first[f].y_m * 1e3, first[f].yaw_rad});
+  }
+  const LineTracksResult result = run_line_tracks(run);
+  if (result.rows_after_leaving > 0) {
+    spdlog::warn(
+        "trial '{}': {} rows after their fillet left the twin's line (placed, crate, air knife or "
+        "fell off) are answered with its last pose",
+        trial.id, result.rows_after_leaving);
+  }
+  std::vector<model_tests::BeltPose> poses;
+  poses.reserve(result.poses.size());
+  for (const LineTrackPose& pose : result.poses) {
+    poses.push_back({pose.s_mm * 1e-3, pose.y_mm * 1e-3, pose.angle_rad});
+  }
+  return poses;
+}
+
 Table TwinLineTracksModel::run(const Dataset& dataset, const Trial& trial) {
   require_experiment(dataset, ExperimentType::kLineTracks, "line-tracks");
+  const bool on_line = runs_on_line(trial.conditions);
   model_tests::BeltTracksParams params;
   params.common = common_;
   params.common.variant = fillet_variant(trial.conditions, common_.variant);
   keep_wet_film_for_wet_trials(params.common.base_spec, trial.conditions);
-  if (trial.commands && trial.commands->channels.size() >= 2) {
+  if (on_line) {
+    // The line's log is replayed by run_on_line.
+  } else if (trial.commands && trial.commands->channels.size() >= 2) {
     params.command_time_s = trial.commands->at("time").values_si;
     for (const Channel& channel : trial.commands->channels) {
       if (channel.name == "time") continue;
@@ -530,15 +622,17 @@ Table TwinLineTracksModel::run(const Dataset& dataset, const Trial& trial) {
             measured_first[f].yaw_rad + jitter_sigma[2] * standard_normal(random);
       }
     }
-    const model_tests::BeltTracksResult result = model_tests::run_belt_tracks(params);
-    if (result.poses.size() != order.size()) {
+    const std::vector<model_tests::BeltPose> poses =
+        on_line ? run_on_line(trial, params.first_poses, params.samples)
+                : model_tests::run_belt_tracks(params).poses;
+    if (poses.size() != order.size()) {
       throw std::runtime_error("the line-tracks model became unstable after " +
-                               std::to_string(result.poses.size()) + " of " +
+                               std::to_string(poses.size()) + " of " +
                                std::to_string(order.size()) + " rows");
     }
     for (std::size_t k = 0; k < order.size(); ++k) {
       const std::size_t row = order[k];
-      const model_tests::BeltPose& pose = result.poses[k];
+      const model_tests::BeltPose& pose = poses[k];
       const std::array<double, 3> value{
           pose.x_m, pose.y_m,
           pose.yaw_rad + kTurn * std::round((angle[row] - pose.yaw_rad) / kTurn)};

@@ -345,6 +345,48 @@ TEST(Dataset, LineTracksOrderTimePerFilletAndReadTheCommandLog) {
       has_problem(problems_of(folder.path()), "tracks.csv", 4, "does not increase for fillet 1"));
 }
 
+TEST(Dataset, ALineLogNamesEveryBeltAndItsStationsAreOnOrOff) {
+  const DatasetFolder folder;
+  folder.write("manifest.yaml",
+               manifest("line_tracks", "conditions:\n  machine: line\n",
+                        "  - id: run1\n    file: tracks.csv\n    commands: line.csv\n"));
+  folder.write("tracks.csv", "time [s],fillet [1],x [mm],y [mm],angle [deg]\n0,1,2900,0,0\n");
+  // Every belt from the takt to the outfeed, by its drive name; the bulk belt is upstream of the
+  // path and not asked for.
+  const std::string belts =
+      "time [s],takt [m/s],transition1 [m/s],transition2 [m/s],guide [m/s],reject [m/s],"
+      "centring [m/s],multilane1_left [m/s],multilane1_right [m/s],multilane2_left [m/s],"
+      "multilane2_right [m/s],squeeze [m/s],outfeed [m/s]";
+  const std::string speeds = "0,0.12,0.3,0.45,0.5,0.5,0.5,0.68,0.52,0.68,0.52,0.5,0.5";
+  folder.write("line.csv", belts + ",flip_plate1 [1],centring_shift [mm]\n" + speeds + ",0,-12\n" +
+                               "0.5," + speeds.substr(2) + ",1,-12\n");
+  const Dataset data = load_dataset(folder.path());
+  ASSERT_TRUE(data.trials[0].commands.has_value());
+  EXPECT_TRUE(runs_on_line(data.trials[0].conditions));
+  EXPECT_DOUBLE_EQ(data.trials[0].commands->at("centring_shift").values_si[0], -0.012);
+  EXPECT_DOUBLE_EQ(data.trials[0].commands->at("flip_plate1").values_si[1], 1.0);
+
+  // A belt left out would run at a guessed speed; a name the line does not have is listed with
+  // the ones it has; a station is off (0) or on (1), nothing between.
+  folder.write("line.csv", "time [s],takt [m/s],conveyor9 [m/s],flip_plate2 [1]\n0,0.1,0.2,2\n");
+  auto problems = problems_of(folder.path());
+  EXPECT_TRUE(has_problem(problems, "line.csv", 1, "required column 'multilane2_right'"));
+  EXPECT_TRUE(has_problem(problems, "line.csv", 1,
+                          "unknown column 'conveyor9' for a line's command log (machine: line)"));
+  folder.write("line.csv", belts + ",flip_plate2 [1]\n" + speeds + ",2\n");
+  EXPECT_TRUE(
+      has_problem(problems_of(folder.path()), "line.csv", 2, "flip_plate2: '2' is not 0 or 1"));
+
+  // Tracks on the line without the log that drove it cannot be replayed.
+  folder.write("manifest.yaml", manifest("line_tracks", "conditions:\n  machine: line\n",
+                                         "  - id: run1\n    file: tracks.csv\n"));
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 0,
+                          "ran on the line (machine: line) and names no command log"));
+  folder.write("manifest.yaml", manifest("line_tracks", "conditions:\n  machine: plant\n",
+                                         "  - id: run1\n    file: tracks.csv\n"));
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 0, "'plant' is not one of"));
+}
+
 TEST(Dataset, EveryExperimentHasASchema) {
   for (const ExperimentType type :
        {ExperimentType::kSlide, ExperimentType::kBend, ExperimentType::kSettle,

@@ -22,6 +22,13 @@ using test::base_model;
 constexpr double kGravityMps2 = 9.81;        // appendix B
 constexpr double kFilletBeltFriction = 0.5;  // appendix B coulomb, fillet-equipment
 
+LineTracksSettings ensemble(int runs, std::uint64_t seed) {
+  LineTracksSettings settings;
+  settings.ensemble_runs = runs;
+  settings.seed = seed;
+  return settings;
+}
+
 // One fillet appearing at (0, 20 mm, 30 deg) on a belt, tracked every 20 ms for `end_s`.
 Trial one_fillet_trial(double end_s) {
   Trial trial;
@@ -88,7 +95,7 @@ TEST(LineTracksTwin, AnEnsembleStartsWithinTheNoiseAndReportsItsSpread) {
   Dataset data = tracks_dataset(trial);
   data.noise_si = {{"x", 0.001}, {"y", 0.001}, {"angle", std::numbers::pi / 180.0}};
   constexpr int kRuns = 8;
-  TwinLineTracksModel model(base_model(), LineTracksSettings{kRuns, 7});
+  TwinLineTracksModel model(base_model(), ensemble(kRuns, 7));
   const Table track = model.run(data, data.trials[0]);
   const auto& x = track.at("x").values_si;
   const auto& x_spread = track.at("x_spread").values_si;
@@ -116,14 +123,14 @@ TEST(LineTracksTwin, AnEnsembleNeedsTheNoiseItJittersBy) {
   trial.conditions["belt_speed"] = 0.5;
   Dataset data = tracks_dataset(trial);
   data.noise_si = {{"x", 0.001}, {"y", 0.001}};  // no angle noise
-  TwinLineTracksModel model(base_model(), LineTracksSettings{4, 1});
+  TwinLineTracksModel model(base_model(), ensemble(4, 1));
   try {
     (void)model.run(data, data.trials[0]);
     FAIL() << "an ensemble ran without the angle's noise";
   } catch (const std::runtime_error& error) {
     EXPECT_NE(std::string(error.what()).find("'angle'"), std::string::npos) << error.what();
   }
-  EXPECT_THROW(TwinLineTracksModel(base_model(), LineTracksSettings{0, 1}), std::invalid_argument);
+  EXPECT_THROW(TwinLineTracksModel(base_model(), ensemble(0, 1)), std::invalid_argument);
 }
 
 // Where the belt has carried a point of it by the end of the trial.
@@ -232,7 +239,7 @@ TEST(LineTracksGenerator, AnEnsembleTellsAHiddenStaticFrictionWhereOneRunCannot)
   const auto score = [&made](const HiddenEffect& effect, int runs) {
     model_tests::CommonParams common = base_model();
     common.base_spec = with_contact_effect(common.base_spec, effect);
-    TwinLineTracksModel model(common, LineTracksSettings{runs, 1});
+    TwinLineTracksModel model(common, ensemble(runs, 1));
     return compare(made.dataset, model).overall("x").score;
   };
   // One run: the truth starts where the generator's did and scores 1 (0.1: as the wet film
@@ -258,7 +265,7 @@ TEST(LineTracksGenerator, FromTheTruePoseOnlyAnEnsembleMatchesTheTruth) {
   options.truth_starts_at_true_pose = true;
   const Dataset data = generate_dataset(options).dataset;
   const auto score = [&data](int runs) {
-    TwinLineTracksModel model(base_model(), LineTracksSettings{runs, 1});
+    TwinLineTracksModel model(base_model(), ensemble(runs, 1));
     return compare(data, model).overall("x").score;
   };
   // One run from the seen first poses carries their error along: sqrt(2) noise sigmas for a
@@ -268,6 +275,66 @@ TEST(LineTracksGenerator, FromTheTruePoseOnlyAnEnsembleMatchesTheTruth) {
   // Eight runs from first poses within the noise: the truth at the noise and its spread (1.06
   // seen), within the 0.3 that the eight runs' own scatter leaves.
   EXPECT_NEAR(score(8), 1.0, 0.3);
+}
+
+}  // namespace
+}  // namespace fl::workbench
+
+namespace fl::workbench {
+namespace {
+
+// Tracks taken on the line (machine: line): the generator's trials replayed on the DEM plant.
+// Four trials of five fillets over the multilane units, 97 rows each: about 0.8 s a trial.
+GeneratedDataset generate_on_line(const std::string& effect, std::uint64_t seed) {
+  GeneratorOptions options;
+  options.experiment = ExperimentType::kLineTracks;
+  options.line_tracks_on_line = true;
+  options.effect = effect;
+  options.seed = seed;
+  options.common = base_model();
+  return generate_dataset(options);
+}
+
+const ErrorCell& cell_of(const CompareReport& report, std::string_view channel,
+                         std::string_view group) {
+  for (const ErrorCell& cell : report.cells) {
+    if (cell.channel == channel && cell.group == group) return cell;
+  }
+  throw std::out_of_range("no cell " + std::string(channel) + " " + std::string(group));
+}
+
+TEST(LineTracksOnTheLine, AHiddenWetFilmFailsTheWetTrialsOnlyAndTheTruthSitsAtTheNoise) {
+  const GeneratedDataset made = generate_on_line("wet_film", 1);
+  // Written and read back: the line logs name every belt by its drive name.
+  const auto folder = std::filesystem::temp_directory_path() / "fl_tracks_on_line";
+  std::filesystem::remove_all(folder);
+  write_dataset(made.dataset, folder);
+  const Dataset loaded = load_dataset(folder);
+  std::filesystem::remove_all(folder);
+  ASSERT_EQ(loaded.trials.size(), 4U);
+  for (const Trial& trial : loaded.trials) {
+    EXPECT_TRUE(runs_on_line(trial.conditions));
+    ASSERT_TRUE(trial.commands.has_value());
+    EXPECT_NE(trial.commands->find("multilane2_right"), nullptr);
+    EXPECT_EQ(trial.data.rows(), 5U * 97U);  // 5 fillets, 97 frames of 25 ms
+  }
+  const auto report_of = [&loaded](const HiddenEffect& effect) {
+    model_tests::CommonParams common = base_model();
+    common.base_spec = with_contact_effect(common.base_spec, effect);
+    TwinLineTracksModel model(common);
+    return compare(loaded, model);
+  };
+  // The truth replays the generator's run: RMS/sigma over about 1900 Gaussian positions is 1
+  // within about 1/sqrt(3800) = 0.016 per channel; 0.1 is six of those.
+  const CompareReport truth = report_of(made.truth);
+  EXPECT_NEAR(truth.overall("x").score, 1.0, 0.1);
+  EXPECT_NEAR(truth.overall("angle").score, 1.0, 0.1);
+  // Without the film the base model is right where the belts are dry and wrong where they are
+  // wet: the film lets the fillets slip where the multilane belts pull them on and apart.
+  const CompareReport base = report_of({});
+  EXPECT_NEAR(cell_of(base, "x", "surface=dry").score, 1.0, 0.1);
+  EXPECT_GT(cell_of(base, "x", "surface=wet").score, 2.0);
+  EXPECT_GT(cell_of(base, "angle", "surface=wet").score, 2.0);
 }
 
 }  // namespace

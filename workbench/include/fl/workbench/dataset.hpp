@@ -10,6 +10,7 @@
 //   const auto& force_n = data.trials[0].data.at("force").values_si;
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -65,8 +66,21 @@ struct Trial {
   std::string id;
   Conditions conditions;  // the dataset's, overridden by the trial's own
   Table data;
-  std::optional<Table> commands;  // line tracks: the belt command log
+  std::optional<Table> commands;  // line tracks: the belt's or the line's command log
 };
+
+// Line tracks' `machine` condition: tracks on one lab belt (the default), or on the line from
+// the takt barrier on, whose command log names every belt of the product path by its drive
+// name (fl::kDriveNames but bulk, speeds) and may give the stations below (0 or 1: plate 1 and
+// plate 2 retracted to flip, the centring unit stroking, the squeeze roller down, the air knife
+// blowing) and the centring unit's shift (a length). A station left out stays at rest.
+inline constexpr std::string_view kMachineBelt = "belt";
+inline constexpr std::string_view kMachineLine = "line";
+inline constexpr std::array<std::string_view, 5> kLineLogFlags{
+    "flip_plate1", "flip_plate2", "centring_stroke", "squeeze_roller_down", "final_reject"};
+inline constexpr std::string_view kLineLogCentringShift = "centring_shift";
+// Whether a trial's tracks were taken on the line (machine: line).
+bool runs_on_line(const Conditions& conditions);
 
 struct Dataset {
   std::filesystem::path folder;

@@ -12,9 +12,12 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
+#include "fl/controller/line_config.hpp"
+#include "fl/twin/dem_plant/dem_plant_config.hpp"
 #include "fl/twin/model_tests/fixtures.hpp"
 #include "fl/workbench/dataset.hpp"
 
@@ -74,6 +77,14 @@ struct GeneratorOptions {
   // tolerance, as a lab puts the fillet back after each slide: the rows then scatter by the
   // placement as well as the noise. false: laid once, straight; the rows differ by the noise.
   bool slide_relaid = false;
+  // Line tracks: on the line (machine: line) instead of one lab belt. Each trial's fillets
+  // appear one by one on the centring belt, as camera 2 would see them, and are tracked over
+  // both multilane units to the squeeze belt, whose differentials turn them; each trial's log
+  // names every belt (line_config's nominal speeds) and flips the units' differentials halfway;
+  // dry then wet. The plant is `line_tracks_plant` on `line_tracks_line` (null: the defaults).
+  bool line_tracks_on_line = false;
+  std::shared_ptr<const LineConfig> line_tracks_line;
+  std::shared_ptr<const DemPlantConfig> line_tracks_plant;
   model_tests::CommonParams common;  // the base model (appendix B, 7 mm) the effect joins
 };
 

@@ -6,9 +6,13 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
+#include "fl/controller/line_config.hpp"
 #include "fl/twin/dem_bulk/bulk_scene.hpp"
+#include "fl/twin/dem_plant/dem_plant_config.hpp"
 #include "fl/twin/model_tests/fixtures.hpp"
+#include "fl/twin/model_tests/model_tests.hpp"
 #include "fl/workbench/compare.hpp"
 
 namespace fl::workbench {
@@ -157,16 +161,25 @@ class TwinBulkFlowModel final : public TrialModel {
 // angle_spread: how far one more run would lie from that mean, 1 sigma (the members' sample
 // standard deviation times sqrt(1 + 1/runs)), which compare adds to the noise. The jitter is drawn
 // from `seed` and the trial's id, so the same dataset gets the same answer.
+// Tracks taken on the line (machine: line) run on the DEM plant of `line` and `plant` (null:
+// default_line_config() and default_dem_plant_config()); its engine model and sphere size are
+// replaced by the workbench's (CommonParams), so an effect added there acts on the line too.
 struct LineTracksSettings {
   int ensemble_runs = 1;
   std::uint64_t seed = 1;
+  std::shared_ptr<const LineConfig> line;
+  std::shared_ptr<const DemPlantConfig> plant;
 };
 
 // Line tracks (the line's cameras following fillets on a belt): every fillet of the trial
 // appears at its first row's pose (x, y, angle: the yaw of its long axis), lying flat and moving
 // with the belt, on one belt of the equipment material driven by the trial's command log (the
 // first speed column, linear between rows; no log: the belt_speed condition); the answer is each
-// fillet's centre and yaw at each of its rows. The angle is the nearest turn to the measured
+// fillet's centre and yaw at each of its rows. A trial with machine: line runs on the DEM plant
+// instead (fl::run_line_tracks): x is the line coordinate s, the angle runs from the thick end to
+// the tip, the log's belt speeds are linear between rows and its stations held from each row;
+// a row after the fillet left the twin's line (placed, crate, air knife) is answered with its
+// last pose, and the run logs how many. The angle is the nearest turn to the measured
 // one (a camera's angle is wrapped, the twin's is not). Variant, mirrored and surface as the
 // slide model (a wet_film acts on surface=wet trials only). An ensemble (LineTracksSettings)
 // needs the dataset's noise on x, y and angle; without it the run is refused.
@@ -177,6 +190,11 @@ class TwinLineTracksModel final : public TrialModel {
   Table run(const Dataset& dataset, const Trial& trial) override;
 
  private:
+  // One run of a machine: line trial from the given first poses (line coordinates, metres).
+  std::vector<model_tests::BeltPose> run_on_line(
+      const Trial& trial, const std::vector<model_tests::BeltPose>& first,
+      const std::vector<model_tests::BeltFilletSample>& samples) const;
+
   model_tests::CommonParams common_;
   LineTracksSettings settings_;
 };
