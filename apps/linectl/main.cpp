@@ -29,6 +29,7 @@
 #include "cli_support.hpp"
 #include "compare_command.hpp"
 #include "control_recording.hpp"
+#include "dataset_from_recording.hpp"
 #include "dem_output.hpp"
 #include "duration.hpp"
 #include "fl/apps/closed_loop.hpp"
@@ -272,6 +273,8 @@ static int checked_main(int argc, char** argv) {
   CLI::App* calibrate = add_calibrate_subcommand(app, calibrate_args);
   GenerateArgs generate_args;
   CLI::App* dataset = add_dataset_subcommand(app, generate_args);
+  FromRecordingArgs from_recording_args;
+  CLI::App* from_recording = add_from_recording_subcommand(*dataset, from_recording_args);
   VisionEvalArgs vision_eval_args;
   CLI::App* vision_eval = add_vision_subcommand(app, vision_eval_args);
   SoakArgs soak_args;
@@ -297,6 +300,7 @@ static int checked_main(int argc, char** argv) {
     if (compare->parsed()) return compare_command(compare_args);
     if (diagnose->parsed()) return diagnose_command(diagnose_args);
     if (calibrate->parsed()) return calibrate_command(calibrate_args);
+    if (from_recording->parsed()) return from_recording_command(from_recording_args);
     if (dataset->parsed()) return generate_command(generate_args);
     if (hmi->parsed()) return hmi_command(hmi_args);
     if (soak->parsed()) return soak_command(soak_args);
