@@ -79,15 +79,15 @@ std::optional<double> DemPlant::entry_room_m(const dem::FilletTemplate& t, doubl
 }
 
 double DemPlant::entry_y_mm(const dem::FilletTemplate& t, double angle_rad, double y_mm,
-                            bool pair) const {
-  // Its extent across the belt at its heading; a pair's partner lies beside it to the left.
+                            double partner_dy_mm) const {
+  // Its extent across the belt at its heading; a pair's partner lies beside it to its left, on
+  // the side partner_dy_mm points to across the belt.
   const double half_w_mm = config_.machinery.belt_half_width_mm;
   const double half_y_mm = (t.half_extent_m.x() * std::abs(std::sin(angle_rad)) +
                             t.half_extent_m.y() * std::abs(std::cos(angle_rad))) /
                            kMm;
-  const double partner_mm = pair ? 2.0 * t.half_extent_m.y() / kMm : 0.0;
-  return std::clamp(y_mm, -half_w_mm + half_y_mm + kWallClearanceMm,
-                    half_w_mm - half_y_mm - partner_mm - kWallClearanceMm);
+  return std::clamp(y_mm, -half_w_mm + half_y_mm + kWallClearanceMm + std::max(0.0, -partner_dy_mm),
+                    half_w_mm - half_y_mm - kWallClearanceMm - std::max(0.0, partner_dy_mm));
 }
 
 void DemPlant::step_layer_infeed(double h_s, const OutputImage& out) {
@@ -111,11 +111,18 @@ void DemPlant::step_layer_infeed(double h_s, const OutputImage& out) {
   }
   if (fillets_.size() + (next.pair ? 2U : 1U) > config_.simulation.max_fillets) return;
   const dem::FilletTemplate& t = templates_[next.variant];
-  const std::optional<double> s_m = entry_room_m(t, next.angle_rad, next.gap_mm * kMm);
+  // A pair's partner lies to the first fillet's left, which at a heading off the travel is also
+  // along the belt: heading near pi, up to 40 mm upstream, where it would hang over the belt's
+  // end, tip off and hold the entry shut for good. Room for both, and the pair placed so that
+  // the partner's centre is no further upstream than the first's.
+  const double partner_m = next.pair ? pair_offset_m(next.variant, next.side) : 0.0;
+  const double partner_ds_m = -std::sin(next.angle_rad) * partner_m;
+  const std::optional<double> s_m =
+      entry_room_m(t, next.angle_rad, next.gap_mm * kMm + std::abs(partner_ds_m));
   if (!s_m) return;
   DemFilletSpawn spawn;
-  spawn.s_mm = *s_m / kMm;
-  spawn.y_mm = entry_y_mm(t, next.angle_rad, next.y_mm, next.pair);
+  spawn.s_mm = (*s_m + std::max(0.0, -partner_ds_m)) / kMm;
+  spawn.y_mm = entry_y_mm(t, next.angle_rad, next.y_mm, std::cos(next.angle_rad) * partner_m / kMm);
   spawn.angle_rad = next.angle_rad;
   spawn.v_mps = drives_.speed_mps(DriveId::kTakt);
   spawn.variant = next.variant;
@@ -175,7 +182,7 @@ void DemPlant::step_bulk_end(const OutputImage& out) {
   const double angle_rad = wrap_angle_rad(std::atan2(r(1, 0), r(0, 0)));
   const dem::FilletTemplate& t = templates_[front->variant];
   // Where it lay across the leveller's belt: fillets side by side there go on side by side.
-  const double y_mm = entry_y_mm(t, angle_rad, front->centroid_m.y() / kMm, false);
+  const double y_mm = entry_y_mm(t, angle_rad, front->centroid_m.y() / kMm, 0.0);
   const std::optional<double> s_m =
       entry_room_m(t, angle_rad, static_cast<double>(config_.feeder.handover_gap_mm) * kMm, y_mm);
   if (!s_m) return;

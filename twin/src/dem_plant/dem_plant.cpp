@@ -226,6 +226,8 @@ DemPlant::DemPlant(const LineConfig& line, const DemPlantConfig& config)
       bonds.push_back({b.i, b.j, b.contact_radius_m, b.thickness_m});
     }
     template_bonds_.push_back(std::move(bonds));
+    pair_offset_m_.push_back(
+        {pair_partner_offset_m(t, SideUp::kSkin), pair_partner_offset_m(t, SideUp::kBone)});
   }
   model_ = build_model();
   check_timestep();
@@ -483,6 +485,27 @@ std::uint32_t DemPlant::add_fillet(std::uint8_t variant, SideUp side,
   return fillets_.back().plant_id;
 }
 
+double DemPlant::pair_partner_offset_m(const dem::FilletTemplate& t, SideUp side) {
+  // The partner's offset where the closest two spheres touch with 0.1 mm overlap, so that the
+  // JKR neck forms and holds the pair together.
+  const double contact_m = 2.0 * t.radii_m.front();
+  const double flip = side == SideUp::kBone ? -1.0 : 1.0;  // turned over: y -> -y
+  double offset_m = 0.0;
+  for (const Vec3& a : t.positions_m) {
+    for (const Vec3& b : t.positions_m) {
+      const double dx = a.x() - b.x();
+      const double dz = a.z() - b.z();
+      const double rest = contact_m * contact_m - dx * dx - dz * dz;
+      if (rest > 0.0) offset_m = std::max(offset_m, flip * (a.y() - b.y()) + std::sqrt(rest));
+    }
+  }
+  return offset_m - 0.0001;
+}
+
+double DemPlant::pair_offset_m(std::uint8_t variant, SideUp side) const {
+  return pair_offset_m_[variant][side == SideUp::kBone ? 1 : 0];
+}
+
 std::optional<std::uint32_t> DemPlant::spawn_fillet(const DemFilletSpawn& spawn) {
   const std::size_t members = spawn.touching_pair ? 2 : 1;
   if (fillets_.size() + members > config_.simulation.max_fillets) return std::nullopt;
@@ -500,19 +523,8 @@ std::optional<std::uint32_t> DemPlant::spawn_fillet(const DemFilletSpawn& spawn)
     // Side by side to the fillet's left, at the offset where the closest two spheres touch
     // with 0.1 mm overlap, so that the JKR neck forms and holds the pair together.
     const Vec3 left(-std::sin(spawn.angle_rad), std::cos(spawn.angle_rad), 0.0);
-    const double contact_m = 2.0 * t.radii_m.front();
-    const double flip = spawn.side == SideUp::kBone ? -1.0 : 1.0;  // turned over: y -> -y
-    double offset_m = 0.0;
-    for (const Vec3& a : t.positions_m) {
-      for (const Vec3& b : t.positions_m) {
-        const double dx = a.x() - b.x();
-        const double dz = a.z() - b.z();
-        const double rest = contact_m * contact_m - dx * dx - dz * dz;
-        if (rest > 0.0) offset_m = std::max(offset_m, flip * (a.y() - b.y()) + std::sqrt(rest));
-      }
-    }
-    add_fillet(variant, spawn.side, centre + (offset_m - 0.0001) * left, spawn.angle_rad,
-               spawn.v_mps, group);
+    add_fillet(variant, spawn.side, centre + pair_offset_m(variant, spawn.side) * left,
+               spawn.angle_rad, spawn.v_mps, group);
   }
   scan_particles();
   return group;

@@ -267,20 +267,25 @@ class DemPlant final : public Plant {
   void start_bulk_end(std::uint64_t seed);
   [[nodiscard]] double level_mm();
   void draw_next_feed();
+  static double pair_partner_offset_m(const dem::FilletTemplate& t, SideUp side);
+  [[nodiscard]] double pair_offset_m(std::uint8_t variant, SideUp side) const;
   // The takt belt's upstream end has room for a fillet of this template and heading, with
   // `gap_m` behind the last one (or, with its place across `y_mm` given, beside those clear
   // of it across by `gap_m`): where its centroid goes along the line, else none.
   [[nodiscard]] std::optional<double> entry_room_m(const dem::FilletTemplate& t, double angle_rad,
                                                    double gap_m,
                                                    std::optional<double> y_mm = {}) const;
-  // A fillet's lateral place on the takt belt at its heading: y clear of the side walls (and
-  // a pair's partner to its left).
+  // A fillet's lateral place on the takt belt at its heading: y clear of the side walls, and so
+  // is a pair's partner, which lies partner_dy_mm across from it (0: no partner).
   [[nodiscard]] double entry_y_mm(const dem::FilletTemplate& t, double angle_rad, double y_mm,
-                                  bool pair) const;
+                                  double partner_dy_mm) const;
 
   LineConfig line_;
   DemPlantConfig config_;
   std::vector<dem::FilletTemplate> templates_;
+  // A touching pair's partner lies this far to the first fillet's left (per variant; skin up,
+  // bone up): computed once, as the feeder asks for it at every step while it waits for room.
+  std::vector<std::array<double, 2>> pair_offset_m_;
   std::vector<std::vector<dem::BodyBond>> template_bonds_;
   std::shared_ptr<const dem::Model> model_;
   std::unique_ptr<dem::Simulation> sim_;
