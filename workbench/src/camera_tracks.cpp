@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 #include <tuple>
+#include <utility>
 
 namespace fl::workbench {
 
@@ -80,14 +81,8 @@ Table tracks_table(const std::vector<CameraTrack>& tracks, int first_fillet) {
       angle.push_back(tracks[t].rows[k].angle_rad);
     }
   }
-  Table table;
-  table.channels = {{"time", *find_unit("s"), time},
-                    {"fillet", *find_unit("1"), fillet},
-                    {"x", *find_unit("mm"), x},
-                    {"y", *find_unit("mm"), y},
-                    {"angle", *find_unit("deg"), angle}};
-  table.lines.resize(time.size());
-  return table;
+  return line_tracks_table(std::move(time), std::move(fillet), std::move(x), std::move(y),
+                           std::move(angle));
 }
 
 }  // namespace fl::workbench

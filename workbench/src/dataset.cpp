@@ -533,6 +533,19 @@ std::string_view to_string(ExperimentType type) {
   return "unknown";
 }
 
+Table line_tracks_table(std::vector<double> time_s, std::vector<double> fillet,
+                        std::vector<double> x_m, std::vector<double> y_m,
+                        std::vector<double> angle_rad) {
+  Table table;
+  table.lines.resize(time_s.size());
+  table.channels = {{"time", *find_unit("s"), std::move(time_s)},
+                    {"fillet", *find_unit("1"), std::move(fillet)},
+                    {"x", *find_unit("mm"), std::move(x_m)},
+                    {"y", *find_unit("mm"), std::move(y_m)},
+                    {"angle", *find_unit("deg"), std::move(angle_rad)}};
+  return table;
+}
+
 bool runs_on_line(const Conditions& conditions) {
   const auto machine = conditions.find("machine");
   if (machine == conditions.end()) return false;

@@ -211,12 +211,8 @@ Trial line_tracks_trial(int k, int fillets, std::mt19937_64& random) {
       angle.push_back(frame == 0 ? first[f][2] : 0.0);
     }
   }
-  trial.data.channels = {{"time", *find_unit("s"), t},
-                         {"fillet", *find_unit("1"), id},
-                         {"x", *find_unit("mm"), x},
-                         {"y", *find_unit("mm"), y},
-                         {"angle", *find_unit("deg"), angle}};
-  trial.data.lines.resize(t.size());
+  trial.data =
+      line_tracks_table(std::move(t), std::move(id), std::move(x), std::move(y), std::move(angle));
   return trial;
 }
 
@@ -282,12 +278,8 @@ Trial line_run_trial(int k, int fillets, std::mt19937_64& random, const LineConf
       angle.push_back(first ? heading : 0.0);
     }
   }
-  trial.data.channels = {{"time", *find_unit("s"), t},
-                         {"fillet", *find_unit("1"), id},
-                         {"x", *find_unit("mm"), x},
-                         {"y", *find_unit("mm"), y},
-                         {"angle", *find_unit("deg"), angle}};
-  trial.data.lines.resize(t.size());
+  trial.data =
+      line_tracks_table(std::move(t), std::move(id), std::move(x), std::move(y), std::move(angle));
   return trial;
 }
 

@@ -12,6 +12,7 @@
 #include <random>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 #include <variant>
 
 #include "displacement_path.hpp"
@@ -420,7 +421,7 @@ Table TwinBulkFlowModel::run(const Dataset& dataset, const Trial& trial) {
 
 TwinLineTracksModel::TwinLineTracksModel(model_tests::CommonParams common,
                                          LineTracksSettings settings)
-    : common_(std::move(common)), settings_(settings) {
+    : common_(std::move(common)), settings_(std::move(settings)) {
   if (common_.base_spec.materials.empty()) common_.base_spec = dem::appendix_b_model_spec();
   if (settings_.ensemble_runs < 1) {
     throw std::invalid_argument("the line-tracks model needs one run or more per trial, not " +

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <numbers>
+#include <utility>
 
 #include "fl/workbench/generator.hpp"
 #include "fl/workbench/twin_models.hpp"
@@ -41,12 +42,8 @@ Trial one_fillet_trial(double end_s) {
     y.push_back(0.02);
     angle.push_back(30.0 * std::numbers::pi / 180.0);
   }
-  trial.data.channels = {{"time", *find_unit("s"), t},
-                         {"fillet", *find_unit("1"), id},
-                         {"x", *find_unit("mm"), x},
-                         {"y", *find_unit("mm"), y},
-                         {"angle", *find_unit("deg"), angle}};
-  trial.data.lines.resize(t.size());
+  trial.data =
+      line_tracks_table(std::move(t), std::move(id), std::move(x), std::move(y), std::move(angle));
   return trial;
 }
 

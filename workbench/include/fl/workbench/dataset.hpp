@@ -82,6 +82,12 @@ inline constexpr std::string_view kLineLogCentringShift = "centring_shift";
 // Whether a trial's tracks were taken on the line (machine: line).
 bool runs_on_line(const Conditions& conditions);
 
+// A line-track data table from SI columns, in the units a camera log is written in (time s,
+// fillet 1, x and y mm, angle deg); a row's line unknown (0), as for made-up data.
+Table line_tracks_table(std::vector<double> time_s, std::vector<double> fillet,
+                        std::vector<double> x_m, std::vector<double> y_m,
+                        std::vector<double> angle_rad);
+
 struct Dataset {
   std::filesystem::path folder;
   std::string name;
