@@ -22,11 +22,11 @@ if(FL_BUILD_TESTS)
     target_link_libraries(twin_dem_plant_tests PRIVATE fl_twin_dem_plant fl_closed_loop
                                                        fl_build_flags GTest::gtest_main)
     target_compile_definitions(twin_dem_plant_tests PRIVATE FL_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
-    # The bulk end's handover and closed-loop runs take 10 to 20 s of line time each (about
-    # half real time here, several times that under the sanitizers): label slow, so the
-    # sanitizer run leaves them to release.
+    # The bulk end's handover and closed-loop runs and the feeder's pairs take 10 to 20 s of
+    # line time each (about half real time here, several times that under the sanitizers):
+    # label slow, so the sanitizer run leaves them to release.
     set(FL_DEM_PLANT_SLOW_TESTS
-        "DemPlantBulkEnd.HandedOverFilletsKeepVariantSideHeadingAndPlace:DemPlantBulkEnd.ClosedLoopFeedsTheLineFromTheHopper:DemPlantBulkEnd.ALoadOverTheTripTorqueTripsTheLeveller")
+        "DemPlantBulkEnd.HandedOverFilletsKeepVariantSideHeadingAndPlace:DemPlantBulkEnd.ClosedLoopFeedsTheLineFromTheHopper:DemPlantBulkEnd.ALoadOverTheTripTorqueTripsTheLeveller:DemPlantFeeder.TouchingPairsAreFedWhollyOntoTheTaktBelt")
     gtest_discover_tests(twin_dem_plant_tests TEST_FILTER "-${FL_DEM_PLANT_SLOW_TESTS}"
                          DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 300)
     gtest_discover_tests(twin_dem_plant_tests TEST_FILTER "${FL_DEM_PLANT_SLOW_TESTS}"
