@@ -118,8 +118,14 @@ std::vector<SightingFrame> sightings_of(const rec::Recording& recording, CameraI
                                         const CameraMount& mount, std::int64_t start_ns) {
   std::vector<SightingFrame> frames;
   std::set<std::uint32_t> seen;
+  std::size_t before_first_scan = 0;
   for (const rec::RecordedEstimates& estimates : recording.estimates) {
     if (estimates.camera != camera || !seen.insert(estimates.frame.sequence).second) continue;
+    // No belt log covers a frame exposed before the first scan (a camera node started first).
+    if (estimates.frame.frame_time_ns < start_ns) {
+      ++before_first_scan;
+      continue;
+    }
     SightingFrame frame;
     frame.time_s = static_cast<double>(estimates.frame.frame_time_ns - start_ns) / kNsPerS;
     for (std::size_t k = 0; k < estimates.frame.count && k < kMaxEstimatesPerFrame; ++k) {
@@ -132,6 +138,12 @@ std::vector<SightingFrame> sightings_of(const rec::Recording& recording, CameraI
   std::stable_sort(
       frames.begin(), frames.end(),
       [](const SightingFrame& a, const SightingFrame& b) { return a.time_s < b.time_s; });
+  if (before_first_scan > 0) {
+    spdlog::warn(
+        "camera {}: {} frames exposed before the first scan are left out (no belt log "
+        "covers them)",
+        rec::camera_name(camera), before_first_scan);
+  }
   return frames;
 }
 

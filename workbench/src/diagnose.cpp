@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "fl/twin/dem/config.hpp"
+#include "fl/workbench/calibrate.hpp"
 #include "fl/workbench/twin_models.hpp"
 #include "residuals.hpp"
 
@@ -53,13 +54,24 @@ struct FitContext {
 model_tests::CommonParams with_effect(const model_tests::CommonParams& base,
                                       const EffectCandidate& candidate, ExperimentType experiment,
                                       const double* unit_point) {
+  model_tests::CommonParams common = base;
+  if (candidate.law == kRecalibratedBase) {
+    std::vector<CalibratedParameter> parameters;
+    std::vector<double> values;
+    for (std::size_t p = 0; p < candidate.parameters.size(); ++p) {
+      const ParameterBound& bound = candidate.parameters[p];
+      parameters.push_back({bound.name, bound.min, bound.max, bound.log});
+      values.push_back(from_unit(bound, unit_point[p]));
+    }
+    common.base_spec = with_calibrated(base.base_spec, parameters, values);
+    return common;
+  }
   HiddenEffect effect;
   effect.law = candidate.law;
   for (std::size_t p = 0; p < candidate.parameters.size(); ++p) {
     effect.parameters[candidate.parameters[p].name] =
         from_unit(candidate.parameters[p], unit_point[p]);
   }
-  model_tests::CommonParams common = base;
   common.base_spec = with_experiment_effect(base.base_spec, experiment, effect);
   return common;
 }
@@ -126,6 +138,26 @@ CandidateResult fit(const Dataset& dataset, const model_tests::CommonParams& bas
 }
 
 }  // namespace
+
+std::optional<EffectCandidate> recalibration_candidate(ExperimentType type,
+                                                       const dem::ModelSpec& base) {
+  if (type != ExperimentType::kCompress && type != ExperimentType::kDrop &&
+      type != ExperimentType::kBend) {
+    return std::nullopt;
+  }
+  constexpr std::string_view kKey = "normal_stiffness_n_per_m3";
+  for (const dem::InteractionSpec& interaction : base.interactions) {
+    if (!interaction.bond_law) continue;
+    const auto found = interaction.bond_law->parameters.find(std::string(kKey));
+    if (found == interaction.bond_law->parameters.end() || !(found->second > 0.0)) continue;
+    // A factor of three either way: the stiffness a lab's fillets spread over, well short of
+    // the decades the effects' own stiffnesses span.
+    return EffectCandidate{
+        std::string(kRecalibratedBase),
+        {{"bond." + std::string(kKey), found->second / 3.0, found->second * 3.0, true}}};
+  }
+  return std::nullopt;
+}
 
 std::vector<EffectCandidate> compress_candidates() {
   return {
@@ -220,6 +252,27 @@ void rank_candidates(Diagnosis& diagnosis, std::vector<CandidateResult> results,
   }
   std::sort(results.begin(), results.end(),
             [](const CandidateResult& a, const CandidateResult& b) { return a.bic < b.bic; });
+  // The refitted base is the null an effect must beat: no effect is proposed that does not
+  // lower the BIC by min_bic_drop below it, and the refit is never proposed as an effect.
+  const auto null = std::find_if(results.begin(), results.end(), [](const CandidateResult& r) {
+    return r.law == kRecalibratedBase;
+  });
+  if (null != results.end()) {
+    const bool null_passes = null->proposed;
+    for (CandidateResult& result : results) {
+      if (&result != &*null && result.bic > null->bic - options.min_bic_drop) {
+        result.proposed = false;
+      }
+    }
+    null->proposed = false;
+    const bool an_effect_passes = std::any_of(results.begin(), results.end(),
+                                              [](const CandidateResult& r) { return r.proposed; });
+    diagnosis.base_off = null_passes && !an_effect_passes;
+    // The proposal goes to the best effect, which may rank after the refit only when it is
+    // not proposed; keep the proposed one first.
+    std::stable_partition(results.begin(), results.end(),
+                          [](const CandidateResult& r) { return r.proposed; });
+  }
   // Only the best may be proposed: the effects compete to explain the same residual. Another
   // that predicts the held-out trial as well and comes within min_bic_drop of the best is
   // named: the data then cannot tell the two apart (on slide onset angles a resting friction
@@ -241,7 +294,17 @@ void rank_candidates(Diagnosis& diagnosis, std::vector<CandidateResult> results,
 std::string diagnosis_verdict(const Diagnosis& diagnosis, const DiagnoseOptions& options) {
   std::ostringstream verdict;
   verdict.precision(3);
-  if (!diagnosis.ranked.empty() && diagnosis.ranked.front().proposed) {
+  if (diagnosis.base_off) {
+    const auto null =
+        std::find_if(diagnosis.ranked.begin(), diagnosis.ranked.end(),
+                     [](const CandidateResult& r) { return r.law == kRecalibratedBase; });
+    verdict << "the base model is off, not missing an effect: refitting";
+    for (const auto& [name, value] : null->fitted) verdict << " " << name << " to " << value;
+    verdict << " explains the failure (RMS error down " << 100.0 * null->improvement
+            << " %, BIC by " << -null->delta_bic << ") and no effect does better by "
+            << options.min_bic_drop
+            << " of BIC: calibrate the base model (linectl calibrate) and diagnose again";
+  } else if (!diagnosis.ranked.empty() && diagnosis.ranked.front().proposed) {
     const CandidateResult& best = diagnosis.ranked.front();
     verdict << best.law << " explains the failure: RMS error falls by " << 100.0 * best.improvement
             << " % (held-out trial '" << diagnosis.held_out_trial << "' "
@@ -372,8 +435,16 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
   spdlog::info("diagnose: base model RMS {:.4g} (SI) over {} samples, held out '{}', judged by {}",
                diagnosis.base_rmse, diagnosis.samples, diagnosis.held_out_trial, diagnosis.score);
 
+  // The refitted base beside the effects: the null each must beat.
+  std::vector<EffectCandidate> fitted_candidates = candidates;
+  if (options.recalibrate_base) {
+    if (auto null = recalibration_candidate(dataset.experiment, base.base_spec)) {
+      fitted_candidates.push_back(std::move(*null));
+    }
+  }
+  const std::vector<EffectCandidate>& all_candidates = fitted_candidates;
   // Candidates in parallel: each fit runs its own twins, nothing shared but the inputs.
-  std::vector<CandidateResult> results(candidates.size());
+  std::vector<CandidateResult> results(all_candidates.size());
   std::mutex next_mutex;
   std::size_t next = 0;
   const auto worker = [&] {
@@ -381,18 +452,18 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
       std::size_t index = 0;
       {
         const std::lock_guard<std::mutex> lock(next_mutex);
-        if (next == candidates.size()) return;
+        if (next == all_candidates.size()) return;
         index = next++;
       }
-      results[index] =
-          fit(dataset, base, candidates[index], fit_trials, all_trials, held_out, options, scoring);
-      spdlog::info("diagnose: {} fitted in {} twin evaluations", candidates[index].law,
+      results[index] = fit(dataset, base, all_candidates[index], fit_trials, all_trials, held_out,
+                           options, scoring);
+      spdlog::info("diagnose: {} fitted in {} twin evaluations", all_candidates[index].law,
                    results[index].evaluations);
     }
   };
   std::vector<std::thread> threads;
-  const int thread_count =
-      std::clamp(options.threads, 1, static_cast<int>(std::max<std::size_t>(candidates.size(), 1)));
+  const int thread_count = std::clamp(
+      options.threads, 1, static_cast<int>(std::max<std::size_t>(all_candidates.size(), 1)));
   threads.reserve(static_cast<std::size_t>(thread_count));
   for (int t = 0; t < thread_count; ++t) threads.emplace_back(worker);
   for (std::thread& thread : threads) thread.join();
@@ -420,7 +491,7 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
     // jittered track that goes unstable) costs the advice, never the diagnosis.
     try {
       diagnosis.base_first_pose_spread = spread_of(base);
-      if (!diagnosis.ranked.empty()) {
+      if (!diagnosis.ranked.empty() && diagnosis.ranked.front().law != kRecalibratedBase) {
         const CandidateResult& best = diagnosis.ranked.front();
         HiddenEffect effect{best.law, best.fitted};
         model_tests::CommonParams fitted = base;
@@ -470,6 +541,7 @@ std::string diagnosis_json(const Diagnosis& diagnosis) {
                       {"first_pose_spread_allowed_si", diagnosis.first_pose_spread_allowed},
                       {"indistinct_from", diagnosis.indistinct_from},
                       {"indistinct_bic_gap", diagnosis.indistinct_bic_gap},
+                      {"base_off", diagnosis.base_off},
                       {"verdict", diagnosis.verdict}};
   nlohmann::json ranked = nlohmann::json::array();
   for (const CandidateResult& r : diagnosis.ranked) {

@@ -7,7 +7,9 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "fl/twin/model_tests/fixtures.hpp"
@@ -30,6 +32,18 @@ struct EffectCandidate {
   std::string law;
   std::vector<ParameterBound> parameters;
 };
+
+// The null candidate every effect must beat: the base model with one of its own parameters
+// refitted (its parameters' names are calibrate's addresses, calibrate.hpp). A model whose base
+// is off (a bond stiffness 20 % low) is otherwise "explained" by whichever effect can stand in
+// for the parameter: a Maxwell arm whose relaxation time sits at its bound is an extra spring.
+inline constexpr std::string_view kRecalibratedBase = "recalibrated_base";
+
+// The null candidate for a dataset's experiment and base model: compress, drop and bend, the
+// bonds' normal stiffness within a factor of three of the base's; none for the others
+// (nullopt: slide and line tracks have none yet).
+std::optional<EffectCandidate> recalibration_candidate(ExperimentType type,
+                                                       const dem::ModelSpec& base);
 
 // The effect library's candidates for a compression dataset, with bounds wide enough for any
 // fillet (three to four decades), not the generator's ranges.
@@ -93,6 +107,9 @@ struct Diagnosis {
   // apart). Empty and 0 otherwise.
   std::string indistinct_from;
   double indistinct_bic_gap = 0.0;
+  // The refitted base (kRecalibratedBase) passes the tests an effect must pass and no effect
+  // beats it by min_bic_drop: the base model is off, not missing an effect. Nothing is proposed.
+  bool base_off = false;
   // "bpm_viscoelastic explains it: ..." or "nothing missing: ...".
   std::string verdict;
 };
@@ -107,6 +124,9 @@ struct DiagnoseOptions {
   // held-out error falls by more than min_held_out_gain and the error over all trials falls.
   double min_bic_drop = 10.0;
   double min_held_out_gain = 0.2;
+  // Fit recalibration_candidate's null candidate beside the effects (where the experiment has
+  // one): an effect is then proposed only when it beats the refitted base by min_bic_drop.
+  bool recalibrate_base = true;
   // How the twins run: line tracks and slides may run an ensemble per trial
   // (LineTracksSettings, SlideSettings), whose mean is fitted: one run's answer can hang on a
   // stick or slip that the noise or the placement decides.
