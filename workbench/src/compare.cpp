@@ -7,8 +7,10 @@
 #include <map>
 #include <set>
 #include <stdexcept>
+#include <variant>
 
 #include "displacement_path.hpp"
+#include "text.hpp"
 
 namespace fl::workbench {
 namespace {
@@ -96,10 +98,53 @@ ErrorCell make_cell(const std::string& channel, std::string group, std::string t
   return cell;
 }
 
-std::string condition_text(const ConditionValue& value) {
+// A condition's value as a group's name: a label or flag as written, a number in its SI unit
+// (rate=0.002 m/s), so trials at the same rate or tilt rate share a cell.
+std::string condition_text(ExperimentType type, const std::string& name,
+                           const ConditionValue& value) {
   if (const auto* label = std::get_if<std::string>(&value)) return *label;
   if (const auto* flag = std::get_if<bool>(&value)) return *flag ? "true" : "false";
-  return {};  // numbers are not grouped: each trial has its own cells already
+  std::string unit;
+  for (const ConditionRule& rule : schema_of(type).conditions) {
+    if (rule.name == name) unit = std::string(si_unit(rule.quantity));
+  }
+  const std::string number = detail::significant(std::get<double>(value), 4);
+  return unit.empty() || unit == "1" ? number : number + " " + unit;
+}
+
+// Line tracks on one belt: "takt" where the logged belt speed changes at the row's time (the
+// belt accelerating or braking, where a fillet slips), "steady belt" elsewhere. Tracks on the
+// line, or without a log, have no phases: which belt a fillet is on is the line's geometry.
+std::vector<std::string> belt_phases(const Trial& trial) {
+  const std::size_t rows = trial.data.rows();
+  std::vector<std::string> phase(rows, "all");
+  if (runs_on_line(trial.conditions) || !trial.commands || trial.commands->channels.size() < 2) {
+    return phase;
+  }
+  const std::vector<double>& log_t = trial.commands->at("time").values_si;
+  const Channel* speed = nullptr;
+  for (const Channel& channel : trial.commands->channels) {
+    if (channel.name != "time" && channel.unit.quantity == Quantity::kSpeed) {
+      speed = &channel;
+      break;
+    }
+  }
+  if (speed == nullptr || log_t.size() < 2) return phase;
+  // A belt changing speed by under a hundredth of g is steady: a drive's ripple, not a takt.
+  constexpr double kSteadyMps2 = 0.1;
+  const std::vector<double>& t = trial.data.at("time").values_si;
+  for (std::size_t k = 0; k < rows; ++k) {
+    const auto after = std::upper_bound(log_t.begin(), log_t.end(), t[k]);
+    bool changing = false;
+    if (after != log_t.begin() && after != log_t.end()) {
+      const auto j = static_cast<std::size_t>(after - log_t.begin());
+      const double slope =
+          (speed->values_si[j] - speed->values_si[j - 1]) / (log_t[j] - log_t[j - 1]);
+      changing = std::abs(slope) > kSteadyMps2;
+    }
+    phase[k] = changing ? "takt" : "steady belt";
+  }
+  return phase;
 }
 
 }  // namespace
@@ -127,6 +172,7 @@ std::vector<std::string> phases_of(ExperimentType type, const Trial& trial,
                                    std::optional<double> stated_displacement_noise_m) {
   const std::size_t rows = trial.data.rows();
   if (type == ExperimentType::kDrop) return drop_phases(trial);
+  if (type == ExperimentType::kLineTracks) return belt_phases(trial);
   std::vector<std::string> phase(rows, "all");
   if (type != ExperimentType::kCompress || rows < 2) return phase;
   const std::vector<double>& t = trial.data.at("time").values_si;
@@ -198,16 +244,31 @@ CompareReport compare(const Dataset& dataset, TrialModel& model) {
   std::set<std::string> varying_conditions;
   for (const Trial& trial : dataset.trials) {
     for (const auto& [name, value] : trial.conditions) {
-      const std::string text = condition_text(value);
-      if (text.empty()) continue;
+      const std::string text = condition_text(dataset.experiment, name, value);
       for (const Trial& other : dataset.trials) {
         const auto found = other.conditions.find(name);
-        if (found == other.conditions.end() || condition_text(found->second) != text) {
+        if (found == other.conditions.end() ||
+            condition_text(dataset.experiment, name, found->second) != text) {
           varying_conditions.insert(name);
         }
       }
     }
   }
+
+  // A number's groups are kept where two trials or more share a value (one trial's own rate
+  // adds nothing to that trial's cell); a label names the condition even for one trial.
+  std::erase_if(varying_conditions, [&dataset](const std::string& name) {
+    std::map<std::string, int> trials_with;
+    bool number = false;
+    for (const Trial& trial : dataset.trials) {
+      const auto found = trial.conditions.find(name);
+      if (found == trial.conditions.end()) continue;
+      number = number || std::holds_alternative<double>(found->second);
+      ++trials_with[condition_text(dataset.experiment, name, found->second)];
+    }
+    return number && std::none_of(trials_with.begin(), trials_with.end(),
+                                  [](const auto& entry) { return entry.second > 1; });
+  });
 
   for (std::size_t index = 0; index < dataset.trials.size(); ++index) {
     const Trial& trial = dataset.trials[index];
@@ -276,7 +337,8 @@ CompareReport compare(const Dataset& dataset, TrialModel& model) {
         for (const std::string& name : varying_conditions) {
           const auto found = trial.conditions.find(name);
           if (found == trial.conditions.end()) continue;
-          add(c.channel, name + "=" + condition_text(found->second), "", "", m, p, s, noise, t);
+          add(c.channel, name + "=" + condition_text(dataset.experiment, name, found->second), "",
+              "", m, p, s, noise, t);
         }
       }
     }

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <random>
 
 #include "fl/workbench/history.hpp"
@@ -284,6 +285,59 @@ TEST(Compare, ConditionGroupsShowTheWetTrialsFailing) {
   }
   EXPECT_NEAR(wet_rmse, 0.5, 1e-12);
   EXPECT_NEAR(dry_rmse, 0.0, 1e-12);
+}
+
+TEST(Compare, ANumberSharedByTrialsIsAGroupAndOneTrialsOwnIsNot) {
+  // Two trials at 1 mm/s, one at 2 mm/s: the rate groups the first two (and names the third).
+  std::vector<Trial> trials{
+      make_trial("a", spring), make_trial("b", spring),
+      make_trial("c", [](double, double d) { return kStiffnessNPerM * d + 0.3; })};
+  trials[0].conditions["rate"] = 0.001;
+  trials[1].conditions["rate"] = 0.001;
+  trials[2].conditions["rate"] = 0.002;
+  SpringModel model;
+  const auto cell = [](const CompareReport& report, const std::string& group) {
+    for (const ErrorCell& c : report.cells) {
+      if (c.group == group) return std::optional<ErrorCell>(c);
+    }
+    return std::optional<ErrorCell>();
+  };
+  const CompareReport shared = compare(make_dataset(trials), model);
+  ASSERT_TRUE(cell(shared, "rate=0.001 m/s").has_value());
+  EXPECT_EQ(cell(shared, "rate=0.001 m/s")->samples, 2 * trials[0].data.rows());
+  EXPECT_NEAR(cell(shared, "rate=0.002 m/s")->rmse_si, 0.3, 1e-12);
+  // Every trial at its own rate: the trials' cells say it all.
+  trials[1].conditions["rate"] = 0.003;
+  EXPECT_FALSE(cell(compare(make_dataset(trials), model), "rate=0.001 m/s").has_value());
+}
+
+TEST(Compare, BeltTracksArePhasedIntoTaktAndSteadyBelt) {
+  // A belt at rest to 0.1 s, up to 1.5 m/s at 4 m/s^2 by 0.475 s, steady to 0.7 s, down by
+  // 1.075 s: rows every 50 ms.
+  Trial trial;
+  trial.id = "takt";
+  std::vector<double> t, id, zero;
+  for (int k = 0; k <= 24; ++k) {
+    t.push_back(0.05 * k);
+    id.push_back(1.0);
+    zero.push_back(0.0);
+  }
+  trial.data = line_tracks_table(t, id, zero, zero, zero);
+  Table log;
+  log.channels = {{"time", *find_unit("s"), {0.0, 0.1, 0.475, 0.7, 1.075}},
+                  {"belt", *find_unit("m/s"), {0.0, 0.0, 1.5, 1.5, 0.0}}};
+  log.lines.resize(5);
+  trial.commands = log;
+  const std::vector<std::string> phase = phases_of(ExperimentType::kLineTracks, trial, {});
+  ASSERT_EQ(phase.size(), t.size());
+  EXPECT_EQ(phase[1], "steady belt");   // 0.05 s, at rest
+  EXPECT_EQ(phase[4], "takt");          // 0.2 s, accelerating
+  EXPECT_EQ(phase[12], "steady belt");  // 0.6 s, at speed
+  EXPECT_EQ(phase[18], "takt");         // 0.9 s, braking
+  EXPECT_EQ(phase[24], "steady belt");  // 1.2 s, after the log: held
+  // On the line the belt under a fillet is the line's geometry: no phases.
+  trial.conditions["machine"] = std::string(kMachineLine);
+  EXPECT_EQ(phases_of(ExperimentType::kLineTracks, trial, {})[4], "all");
 }
 
 TEST(Compare, TrialsTheModelCannotRunAreListedNotFatal) {
