@@ -262,6 +262,13 @@ int diagnose_command(const CompareArgs& args) {
     spdlog::info("{:<18} {:>10.1f} {:>12.1f} {:>14.4g}  {}{}", r.law, r.delta_bic,
                  100.0 * r.improvement, r.held_out_rmse, fitted, r.proposed ? "<- proposed" : "");
   }
+  if (!diagnosis.by_trial.empty()) {
+    spdlog::info("where the error fell with {} (RMS, SI):", diagnosis.ranked.front().law);
+    for (const Diagnosis::TrialError& t : diagnosis.by_trial) {
+      spdlog::info("  {:<24} {:>12.4g} -> {:<12.4g}{}", t.trial, t.base_rmse, t.fitted_rmse,
+                   t.trial == diagnosis.held_out_trial ? " (held out)" : "");
+    }
+  }
   spdlog::info("{}", diagnosis.verdict);
   const HiddenEffect effect = proposed_effect(diagnosis);
   fs::remove(out / "effect.yaml");  // a rerun that proposes nothing leaves none behind

@@ -512,6 +512,32 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
         diagnosis.base_first_pose_spread, diagnosis.best_first_pose_spread);
   }
 
+  // Where the error fell, trial by trial, for the first-ranked fit.
+  if (!diagnosis.ranked.empty()) {
+    const CandidateResult& first = diagnosis.ranked.front();
+    const auto candidate =
+        std::find_if(fitted_candidates.begin(), fitted_candidates.end(),
+                     [&first](const EffectCandidate& c) { return c.law == first.law; });
+    std::vector<double> unit_point;
+    for (const ParameterBound& bound : candidate->parameters) {
+      const double value = first.fitted.at(bound.name);
+      unit_point.push_back(bound.log ? std::log(value / bound.min) / std::log(bound.max / bound.min)
+                                     : (value - bound.min) / (bound.max - bound.min));
+    }
+    try {
+      const model_tests::CommonParams fitted =
+          with_effect(base, *candidate, dataset.experiment, unit_point.data());
+      for (const std::size_t k : all_trials) {
+        const Residuals r = residuals(dataset, fitted, {k}, options.twin);
+        diagnosis.by_trial.push_back({dataset.trials[k].id, base_trial_rmse[k],
+                                      std::sqrt(r.rss / static_cast<double>(r.samples))});
+      }
+    } catch (const std::exception& error) {
+      diagnosis.by_trial.clear();
+      spdlog::warn("diagnose: the fitted {} could not be run again per trial ({})", first.law,
+                   error.what());
+    }
+  }
   diagnosis.verdict = diagnosis_verdict(diagnosis, options);
   return diagnosis;
 }
@@ -557,6 +583,12 @@ std::string diagnosis_json(const Diagnosis& diagnosis) {
                       {"evaluations", r.evaluations}});
   }
   json["ranked"] = ranked;
+  nlohmann::json by_trial = nlohmann::json::array();
+  for (const Diagnosis::TrialError& t : diagnosis.by_trial) {
+    by_trial.push_back(
+        {{"trial", t.trial}, {"base_rmse_si", t.base_rmse}, {"fitted_rmse_si", t.fitted_rmse}});
+  }
+  json["by_trial"] = by_trial;
   return json.dump(1);
 }
 

@@ -88,6 +88,12 @@ TEST(Diagnose, ABaseStiffnessOffIsABaseErrorNotAMissingEffect) {
               0.03 * test::kTruthStiffness);
   EXPECT_NE(diagnosis.verdict.find("the base model is off"), std::string::npos)
       << diagnosis.verdict;
+  // Where the error fell: every trial, each from the base's miss to the noise (0.01 N) or near.
+  ASSERT_EQ(diagnosis.by_trial.size(), data.trials.size());
+  for (const Diagnosis::TrialError& trial : diagnosis.by_trial) {
+    EXPECT_GT(trial.base_rmse, 5.0 * test::kNoiseN) << trial.trial;
+    EXPECT_LT(trial.fitted_rmse, 1.5 * test::kNoiseN) << trial.trial;
+  }
 }
 
 TEST(Diagnose, RefusesWhatItCannotJudge) {

@@ -110,6 +110,15 @@ struct Diagnosis {
   // The refitted base (kRecalibratedBase) passes the tests an effect must pass and no effect
   // beats it by min_bic_drop: the base model is off, not missing an effect. Nothing is proposed.
   bool base_off = false;
+  // Where the error fell: per trial, the base model's RMS and that of the first-ranked fit (the
+  // proposed effect, or the refit when the base is off), in the dataset's order. Empty when
+  // nothing was fitted or the fitted model could not be run again.
+  struct TrialError {
+    std::string trial;
+    double base_rmse = 0.0;
+    double fitted_rmse = 0.0;
+  };
+  std::vector<TrialError> by_trial;
   // "bpm_viscoelastic explains it: ..." or "nothing missing: ...".
   std::string verdict;
 };
