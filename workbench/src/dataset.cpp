@@ -199,6 +199,9 @@ struct HeaderColumn {
   std::string name;
   Unit unit;
   const ColumnRule* rule = nullptr;  // null for command-log speed columns
+  // false: its header was refused (unit, name, twice); its cells are still checked for being
+  // finite numbers, so that one bad header hides no problem of the rows.
+  bool usable = true;
 };
 
 // "force [N]" -> force, N. Reports and returns false when malformed.
@@ -283,6 +286,15 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
   std::vector<HeaderColumn> columns;
   std::set<std::string, std::less<>> seen;
   bool header_ok = true;
+  // A column whose header is refused stays in place, unusable, under its written name (not
+  // reported missing as well).
+  const auto refuse = [&](HeaderColumn& entry, std::string_view bare) {
+    header_ok = false;
+    entry.name = std::string(bare);
+    entry.usable = false;
+    seen.insert(entry.name);
+    columns.push_back(std::move(entry));
+  };
   for (std::size_t c = 0; c < header.fields.size(); ++c) {
     const int column = static_cast<int>(c) + 1;
     const std::string_view raw = detail::trim(header.fields[c]);
@@ -299,7 +311,7 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
     const Quantity expected = rule != nullptr ? rule->quantity : Quantity::kSpeed;
     if (!parse_header_field(header.fields[c], header.line, column, problems, entry.name, entry.unit,
                             expected, rule != nullptr || commands)) {
-      header_ok = false;
+      refuse(entry, bare);
       continue;
     }
     if (rules != nullptr && rule == nullptr) {
@@ -311,7 +323,7 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
                             ? std::string("a line's command log (machine: line)")
                             : "a " + std::string(to_string(schema->type)) + " dataset") +
                        " (its columns: " + join(names) + ")");
-      header_ok = false;
+      refuse(entry, bare);
       continue;
     }
     if (entry.unit.quantity != expected) {
@@ -319,12 +331,12 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
                    entry.name + ": '" + std::string(entry.unit.symbol) + "' is a unit of " +
                        std::string(to_string(entry.unit.quantity)) + ", the column is a " +
                        std::string(to_string(expected)) + " (use " + units_of(expected) + ")");
-      header_ok = false;
+      refuse(entry, bare);
       continue;
     }
     if (!seen.insert(entry.name).second) {
       problems.add(header.line, column, "column '" + entry.name + "' appears twice");
-      header_ok = false;
+      refuse(entry, bare);
       continue;
     }
     entry.rule = rule;
@@ -343,7 +355,6 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
       if (r.required) require_column(r.name);
     }
   }
-  if (!header_ok) return std::nullopt;
 
   // Data rows.
   Table table;
@@ -383,8 +394,8 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
         row_ok = false;
         continue;
       }
-      const double value_si = value * h.unit.to_si;
-      const ColumnRule* rule = h.rule;
+      const double value_si = h.usable ? value * h.unit.to_si : value;
+      const ColumnRule* rule = h.usable ? h.rule : nullptr;
       if (kind == TableKind::kLineLog && rule != nullptr &&
           rule->quantity == Quantity::kDimensionless && value != 0.0 && value != 1.0) {
         problems.add(row.line, column,
@@ -442,8 +453,8 @@ std::optional<Table> read_table(const std::filesystem::path& path, const std::st
   // start after unloading or a back-off before a pre-loaded test is not mistaken for it.
   const Channel* displacement = table.find("displacement");
   const Channel* force = table.find("force");
-  if (schema != nullptr && schema->type == ExperimentType::kCompress && displacement != nullptr &&
-      force != nullptr && table.rows() > 0) {
+  if (header_ok && schema != nullptr && schema->type == ExperimentType::kCompress &&
+      displacement != nullptr && force != nullptr && table.rows() > 0) {
     constexpr double kEncoderJitterM = 10e-6;
     const std::vector<double>& d = displacement->values_si;
     const std::vector<double>& f = force->values_si;

@@ -227,6 +227,21 @@ TEST(Dataset, HeaderProblems) {
                           "required column 'force' is missing"));
 }
 
+TEST(Dataset, ABadHeaderHidesNoProblemOfTheRows) {
+  // Found by an audit: a column with an unknown unit stopped the file's checks there, so the
+  // NaN and the negative time below went unreported, and the column was reported missing too.
+  const DatasetFolder folder;
+  folder.write("manifest.yaml", manifest("compress", kRate, kOneTrial));
+  folder.write("a.csv", "time [s],displacement [furlong],force [N]\n0,0,0\n0.1,nan,0.2\n-1,0,0\n");
+  const auto problems = problems_of(folder.path());
+  EXPECT_TRUE(has_problem(problems, "a.csv", 1, "unknown unit 'furlong'"));
+  EXPECT_TRUE(has_problem(problems, "a.csv", 3, "displacement: 'nan' is not finite"));
+  EXPECT_TRUE(has_problem(problems, "a.csv", 4, "time: -1 s is out of range"));
+  for (const DatasetProblem& problem : problems) {
+    EXPECT_EQ(problem.message.find("is missing"), std::string::npos) << problem.to_string();
+  }
+}
+
 TEST(Dataset, CellProblemsNameLineAndColumn) {
   const DatasetFolder folder;
   folder.write("manifest.yaml", manifest("compress", kRate, kOneTrial));
