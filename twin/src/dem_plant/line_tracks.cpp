@@ -111,7 +111,6 @@ LineTracksResult run_line_tracks(const LineTracksRun& run) {
   plant.reset(run.seed, in);
 
   LineTracksResult result;
-  result.engine_timestep_s = plant.engine_timestep_s();
   result.poses.reserve(run.samples.size());
   const std::int64_t period_ns = std::max<std::int64_t>(1, to_ns(run.command_period_s));
 
@@ -153,8 +152,6 @@ LineTracksResult run_line_tracks(const LineTracksRun& run) {
                                  std::to_string(f));
       }
       last[f] = {start.s_mm, start.y_mm, start.angle_rad, true};
-      result.particles_at_most =
-          std::max(result.particles_at_most, plant.simulation().state().size());
     }
   };
 

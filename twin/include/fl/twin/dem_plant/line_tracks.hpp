@@ -67,8 +67,6 @@ struct LineTracksRun {
 struct LineTracksResult {
   std::vector<LineTrackPose> poses;  // one per sample, in the samples' order
   std::size_t rows_after_leaving = 0;
-  std::size_t particles_at_most = 0;
-  double engine_timestep_s = 0.0;
 };
 
 // Throws std::invalid_argument naming the problem for samples out of time order, a sample of a
