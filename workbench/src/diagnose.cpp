@@ -130,10 +130,15 @@ CandidateResult fit(const Dataset& dataset, const model_tests::CommonParams& bas
       with_effect(base, candidate, dataset.experiment, x.data());
   const Residuals all = residuals(dataset, fitted, all_trials, options.twin);
   result.rss = all.rss;
+  for (const detail::TrialRepetitions& trial : all.trials) {
+    result.trial_rmse.push_back(std::sqrt(trial.rss / static_cast<double>(trial.rows)));
+  }
   result.model_spread = std::sqrt(all.spread_ss / static_cast<double>(all.samples));
   result.bic = bic(all, scoring, dimensions);
-  const Residuals out = residuals(dataset, fitted, {held_out}, options.twin);
-  result.held_out_rmse = std::sqrt(out.rss / static_cast<double>(out.samples));
+  // The held-out trial is one of all_trials: its error is in that run already.
+  const auto held_out_at = static_cast<std::size_t>(
+      std::find(all_trials.begin(), all_trials.end(), held_out) - all_trials.begin());
+  result.held_out_rmse = result.trial_rmse.at(held_out_at);
   return result;
 }
 
@@ -512,30 +517,13 @@ Diagnosis diagnose(const Dataset& dataset, const model_tests::CommonParams& base
         diagnosis.base_first_pose_spread, diagnosis.best_first_pose_spread);
   }
 
-  // Where the error fell, trial by trial, for the first-ranked fit.
-  if (!diagnosis.ranked.empty()) {
-    const CandidateResult& first = diagnosis.ranked.front();
-    const auto candidate =
-        std::find_if(fitted_candidates.begin(), fitted_candidates.end(),
-                     [&first](const EffectCandidate& c) { return c.law == first.law; });
-    std::vector<double> unit_point;
-    for (const ParameterBound& bound : candidate->parameters) {
-      const double value = first.fitted.at(bound.name);
-      unit_point.push_back(bound.log ? std::log(value / bound.min) / std::log(bound.max / bound.min)
-                                     : (value - bound.min) / (bound.max - bound.min));
-    }
-    try {
-      const model_tests::CommonParams fitted =
-          with_effect(base, *candidate, dataset.experiment, unit_point.data());
-      for (const std::size_t k : all_trials) {
-        const Residuals r = residuals(dataset, fitted, {k}, options.twin);
-        diagnosis.by_trial.push_back({dataset.trials[k].id, base_trial_rmse[k],
-                                      std::sqrt(r.rss / static_cast<double>(r.samples))});
-      }
-    } catch (const std::exception& error) {
-      diagnosis.by_trial.clear();
-      spdlog::warn("diagnose: the fitted {} could not be run again per trial ({})", first.law,
-                   error.what());
+  // Where the error fell, trial by trial, for the first-ranked fit (from its fit's run over
+  // all trials).
+  if (!diagnosis.ranked.empty() &&
+      diagnosis.ranked.front().trial_rmse.size() == all_trials.size()) {
+    const std::vector<double>& fitted_rmse = diagnosis.ranked.front().trial_rmse;
+    for (const std::size_t k : all_trials) {
+      diagnosis.by_trial.push_back({dataset.trials[k].id, base_trial_rmse[k], fitted_rmse[k]});
     }
   }
   diagnosis.verdict = diagnosis_verdict(diagnosis, options);

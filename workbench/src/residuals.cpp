@@ -52,7 +52,10 @@ Residuals residuals(const Dataset& dataset, const model_tests::CommonParams& com
     double spread_ss = 0.0;
     for (std::size_t k = 0; k < measured.size(); ++k) {
       const double e = modelled[k] - measured[k];
+      // Summed row by row into both: the total keeps its order of addition (a fit's path
+      // hangs on its round-off).
       r.rss += e * e;
+      repetitions.rss += e * e;
       repetitions.measured_mean += measured[k];
       repetitions.model_mean += modelled[k];
     }

@@ -32,6 +32,7 @@ struct TrialRepetitions {
   double within_ss = 0.0;  // the measured rows' squared scatter about their mean
   double model_mean = 0.0;
   double model_spread = 0.0;  // an ensemble twin's spread (0 for one run)
+  double rss = 0.0;           // the trial's own share of Residuals::rss
 };
 
 struct Residuals {

@@ -66,6 +66,8 @@ struct CandidateResult {
   double model_spread = 0.0;   // an ensemble twin's own spread, RMS over all trials (else 0)
   bool proposed = false;
   int evaluations = 0;
+  // RMS per trial over all trials, in the dataset's order (what Diagnosis::by_trial reads).
+  std::vector<double> trial_rmse;
 };
 
 struct Diagnosis {
@@ -112,7 +114,7 @@ struct Diagnosis {
   bool base_off = false;
   // Where the error fell: per trial, the base model's RMS and that of the first-ranked fit (the
   // proposed effect, or the refit when the base is off), in the dataset's order. Empty when
-  // nothing was fitted or the fitted model could not be run again.
+  // nothing was fitted.
   struct TrialError {
     std::string trial;
     double base_rmse = 0.0;
