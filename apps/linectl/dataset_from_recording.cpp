@@ -85,14 +85,13 @@ class ScanLog {
       std::vector<double> shift_m;
       for (const rec::RecordedScan& scan : recording.scans) {
         const OutputImage& out = *scan.recorded_output;
-        const std::array<bool, kLineLogFlags.size()> on{out.flip_plate1_flip, out.flip_plate2_flip,
-                                                        out.centring_stroke,
-                                                        out.squeeze_roller_down, out.final_reject};
-        for (std::size_t f = 0; f < on.size(); ++f) flags[f].push_back(on[f] ? 1.0 : 0.0);
+        for (std::size_t f = 0; f < kLineLogFlags.size(); ++f) {
+          flags[f].push_back(out.*kLineLogFlags[f].field ? 1.0 : 0.0);
+        }
         shift_m.push_back(out.centring_shift_mm * kMm);
       }
       for (std::size_t f = 0; f < flags.size(); ++f) {
-        log.channels.push_back({std::string(kLineLogFlags[f]), *find_unit("1"), flags[f]});
+        log.channels.push_back({std::string(kLineLogFlags[f].column), *find_unit("1"), flags[f]});
       }
       log.channels.push_back({std::string(kLineLogCentringShift), *find_unit("mm"), shift_m});
     } else {

@@ -251,8 +251,8 @@ const std::vector<ColumnRule>& line_log_columns() {
       // A belt of the line runs under 5 m/s either way (the reject belt reverses).
       rules.push_back({kDriveNames[d], Quantity::kSpeed, -5.0, 5.0, true});
     }
-    for (const std::string_view flag : kLineLogFlags) {
-      rules.push_back({flag, Quantity::kDimensionless, 0.0, 1.0, false});
+    for (const LineLogFlag& flag : kLineLogFlags) {
+      rules.push_back({flag.column, Quantity::kDimensionless, 0.0, 1.0, false});
     }
     // The pusher's stroke across a 400 mm belt.
     rules.push_back({kLineLogCentringShift, Quantity::kLength, -0.2, 0.2, false});

@@ -487,15 +487,11 @@ OutputImage line_commands_at(const Table& log, double time_s) {
       out.drives[d].speed_mps = static_cast<float>(log_value_at(t, speed->values_si, time_s, true));
     }
   }
-  const auto flag = [&](std::string_view name) {
-    const Channel* channel = log.find(name);
-    return channel != nullptr && log_value_at(t, channel->values_si, time_s, false) > 0.5;
-  };
-  out.flip_plate1_flip = flag(kLineLogFlags[0]);
-  out.flip_plate2_flip = flag(kLineLogFlags[1]);
-  out.centring_stroke = flag(kLineLogFlags[2]);
-  out.squeeze_roller_down = flag(kLineLogFlags[3]);
-  out.final_reject = flag(kLineLogFlags[4]);
+  for (const LineLogFlag& flag : kLineLogFlags) {
+    const Channel* channel = log.find(flag.column);
+    out.*flag.field =
+        channel != nullptr && log_value_at(t, channel->values_si, time_s, false) > 0.5;
+  }
   if (const Channel* shift = log.find(kLineLogCentringShift); shift != nullptr) {
     out.centring_shift_mm =
         static_cast<float>(log_value_at(t, shift->values_si, time_s, false) * 1e3);

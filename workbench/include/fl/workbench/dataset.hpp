@@ -22,6 +22,7 @@
 #include <variant>
 #include <vector>
 
+#include "fl/controller/process_image.hpp"
 #include "fl/workbench/units.hpp"
 
 namespace fl::workbench {
@@ -76,8 +77,16 @@ struct Trial {
 // blowing) and the centring unit's shift (a length). A station left out stays at rest.
 inline constexpr std::string_view kMachineBelt = "belt";
 inline constexpr std::string_view kMachineLine = "line";
-inline constexpr std::array<std::string_view, 5> kLineLogFlags{
-    "flip_plate1", "flip_plate2", "centring_stroke", "squeeze_roller_down", "final_reject"};
+struct LineLogFlag {
+  std::string_view column;
+  bool OutputImage::*field;  // the output image's command the column logs
+};
+inline constexpr std::array<LineLogFlag, 5> kLineLogFlags{
+    {{"flip_plate1", &OutputImage::flip_plate1_flip},
+     {"flip_plate2", &OutputImage::flip_plate2_flip},
+     {"centring_stroke", &OutputImage::centring_stroke},
+     {"squeeze_roller_down", &OutputImage::squeeze_roller_down},
+     {"final_reject", &OutputImage::final_reject}}};
 inline constexpr std::string_view kLineLogCentringShift = "centring_shift";
 // Whether a trial's tracks were taken on the line (machine: line).
 bool runs_on_line(const Conditions& conditions);
