@@ -154,7 +154,8 @@ TEST(Dataset, RequiredConditionMayComeFromEitherLevelButMustCome) {
   const DatasetFolder folder;
   folder.write("a.csv", "time [s],displacement [mm],force [N]\n0,0,0\n");
   folder.write("manifest.yaml", manifest("compress", "", kOneTrial));
-  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 0,
+  // Line 5: the trial lacking it (line 4 is "trials:").
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 5,
                           "trial 'a' has no condition 'rate'"));
   folder.write("manifest.yaml",
                manifest("compress", "", kOneTrial + "    conditions:\n      rate: 2 mm/s\n"));
@@ -399,7 +400,8 @@ TEST(Dataset, ALineLogNamesEveryBeltAndItsStationsAreOnOrOff) {
   // Tracks on the line without the log that drove it cannot be replayed.
   folder.write("manifest.yaml", manifest("line_tracks", "conditions:\n  machine: line\n",
                                          "  - id: run1\n    file: tracks.csv\n"));
-  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 0,
+  // Line 7: the trial, after two lines of conditions and "trials:".
+  EXPECT_TRUE(has_problem(problems_of(folder.path()), "manifest.yaml", 7,
                           "ran on the line (machine: line) and names no command log"));
   folder.write("manifest.yaml", manifest("line_tracks", "conditions:\n  machine: plant\n",
                                          "  - id: run1\n    file: tracks.csv\n"));

@@ -788,6 +788,8 @@ void YamlMapReader::for_each_map(
   for (std::size_t i = 0; i < entry->value.size(); ++i) {
     const std::string element_key = std::string(key) + "[" + std::to_string(i) + "]";
     const YAML::Node element_node = entry->value[i];
+    // A check made after reading (report_at on "trials[2]") still finds the element's line.
+    state_->key_marks.emplace(path_of(element_key), element_node.Mark());
     if (!element_node.IsMap()) {
       state_->add(path_of(element_key), element_node.Mark(), ProblemKind::kWrongType,
                   "expected a mapping, found " + describe_node(element_node));
