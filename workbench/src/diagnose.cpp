@@ -164,49 +164,45 @@ std::optional<EffectCandidate> recalibration_candidate(ExperimentType type,
   return std::nullopt;
 }
 
-std::vector<EffectCandidate> compress_candidates() {
-  return {
-      {"bpm_viscoelastic",
-       {{"relaxation_stiffness_n_per_m3", 1e4, 1e8, true},
-        {"relaxation_time_s", 1e-3, 10.0, true}}},
-      {"bpm_plastic", {{"normal_yield_strength_pa", 1.0, 1e4, true}}},
-  };
+namespace {
+
+template <typename Law>
+EffectCandidate candidate_of(const dem::LawInfo<Law>& info) {
+  EffectCandidate candidate{info.name, {}};
+  for (const dem::LawParameterInfo& parameter : info.parameters) {
+    if (!parameter.fit_range) continue;
+    const dem::FitRange& range = *parameter.fit_range;
+    candidate.parameters.push_back({parameter.name, range.min, range.max, range.log_scale});
+  }
+  return candidate;
 }
 
-std::vector<EffectCandidate> slide_candidates() {
-  // Bounds any fillet on any plate stays inside: resting friction 0.1 to 3 (onset 6 to 72 deg)
-  // with contacts counted as resting below 0.1 to 100 mm/s; a film taking none to 95 % of the
-  // friction load; rolling friction over three decades up to 1.
-  return {
-      {"static_kinetic_friction",
-       {{"static_friction_coefficient", 0.1, 3.0, true}, {"stick_speed_m_per_s", 1e-4, 0.1, true}}},
-      {"wet_film", {{"lubrication", 0.0, 0.95, false}}},
-      {"rolling_resistance", {{"rolling_friction", 1e-3, 1.0, true}}},
-  };
-}
+}  // namespace
 
-std::vector<EffectCandidate> candidates_for(ExperimentType type) {
-  // A belt's takt loads the fillet-belt contact as a tilted plate does: the slide's candidates.
-  if (type == ExperimentType::kSlide || type == ExperimentType::kLineTracks) {
-    return slide_candidates();
+std::vector<EffectCandidate> candidates_for(ExperimentType type, const dem::LawRegistry& registry) {
+  if (type == ExperimentType::kBulkFlow) {
+    throw std::invalid_argument("no effect candidates for " + std::string(to_string(type)) +
+                                " datasets");
   }
-  // A drop or a settle loads the same bonds as a compression, at impact rates: the same laws.
-  if (type == ExperimentType::kCompress || type == ExperimentType::kDrop ||
-      type == ExperimentType::kSettle) {
-    return compress_candidates();
-  }
-  // A bend loads the bonds along the whole fillet, thick rear and thin tip: the bond laws and
-  // stiffness graded with thickness (a reference thickness from the tip's 15 mm to the rear's
-  // 45 mm, an exponent from uniform to cubic, as a plate's bending stiffness goes with t^3).
-  if (type == ExperimentType::kBend) {
-    std::vector<EffectCandidate> candidates = compress_candidates();
-    candidates.push_back({"bpm_graded",
-                          {{"reference_thickness_m", 0.015, 0.045, false},
-                           {"thickness_exponent", 0.0, 3.0, false}}});
+  std::vector<EffectCandidate> candidates;
+  if (loads_contacts(type)) {
+    // A belt's takt loads the fillet-belt contact as a tilted plate does.
+    for (const std::string& name : registry.contact_law_names()) {
+      const dem::LawInfo<dem::ContactLaw>& info = *registry.find_contact_law(name);
+      if (info.is_effect()) candidates.push_back(candidate_of(info));
+    }
     return candidates;
   }
-  throw std::invalid_argument("no effect candidates for " + std::string(to_string(type)) +
-                              " datasets");
+  // A drop or a settle loads the same bonds as a compression, at impact rates; a bend loads
+  // them along the whole fillet. Compress's specimen is a block with no thickness profile.
+  const bool specimen_is_fillet = type != ExperimentType::kCompress;
+  for (const std::string& name : registry.bond_law_names()) {
+    const dem::LawInfo<dem::BondLaw>& info = *registry.find_bond_law(name);
+    if (!info.is_effect()) continue;
+    if (!specimen_is_fillet && registry.sample_bond_law(name)->needs_bond_thickness()) continue;
+    candidates.push_back(candidate_of(info));
+  }
+  return candidates;
 }
 
 std::size_t held_out_trial(const Dataset& dataset, const std::vector<double>& base_trial_rmse) {

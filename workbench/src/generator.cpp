@@ -320,57 +320,64 @@ std::vector<std::string> drop_effect_candidates() { return names_of(drop_effects
 
 std::vector<std::string> bend_effect_candidates() { return names_of(bend_effects()); }
 
-dem::ModelSpec with_contact_effect(const dem::ModelSpec& base, const HiddenEffect& effect) {
+dem::ModelSpec with_contact_effect(const dem::ModelSpec& base, const HiddenEffect& effect,
+                                   const dem::LawRegistry& registry) {
   dem::ModelSpec spec = base;
   if (effect.law.empty()) return spec;
-  if (effect.law != "static_kinetic_friction" && effect.law != "wet_film" &&
-      effect.law != "rolling_resistance") {
-    throw std::invalid_argument("'" + effect.law + "' is not a contact-law effect");
+  if (registry.find_contact_law(effect.law) == nullptr) {
+    throw std::invalid_argument("'" + effect.law + "' is not a contact law of the effect library");
   }
-  const std::uint32_t equipment = model_tests::equipment_type(spec);
-  const auto named = [](std::string_view name) {
-    return [name](const dem::LawSpec& law) { return law.name == name; };
+  const dem::ChainStage stage = registry.sample_contact_law(effect.law)->chain_stage();
+  const auto stage_of = [&registry](const dem::LawSpec& law) {
+    return registry.sample_contact_law(law.name)->chain_stage();
   };
+  const std::uint32_t equipment = model_tests::equipment_type(spec);
   for (dem::InteractionSpec& interaction : spec.interactions) {
     if (!model_tests::is_fillet_with(interaction, equipment)) continue;
     std::vector<dem::LawSpec>& laws = interaction.contact_laws;
-    auto present = std::find_if(laws.begin(), laws.end(), named(effect.law));
+    auto present = std::find_if(laws.begin(), laws.end(),
+                                [&](const dem::LawSpec& law) { return law.name == effect.law; });
     if (present == laws.end()) {
-      auto friction = std::find_if(laws.begin(), laws.end(), named("coulomb"));
-      if (friction == laws.end()) {
-        friction = std::find_if(laws.begin(), laws.end(), named("static_kinetic_friction"));
-      }
-      if (effect.law == "static_kinetic_friction") {
+      const auto later = std::find_if(
+          laws.begin(), laws.end(), [&](const dem::LawSpec& law) { return stage_of(law) > stage; });
+      const auto friction = std::find_if(laws.begin(), laws.end(), [&](const dem::LawSpec& law) {
+        return stage_of(law) == dem::ChainStage::kFriction;
+      });
+      if (stage == dem::ChainStage::kFriction && friction != laws.end()) {
         dem::LawSpec law{effect.law, {}};
-        if (friction != laws.end() && friction->name == "coulomb") {
+        const auto* info = registry.find_contact_law(effect.law);
+        const bool has_kinetic =
+            std::any_of(info->parameters.begin(), info->parameters.end(),
+                        [](const auto& p) { return p.name == "kinetic_friction_coefficient"; });
+        if (friction->name == "coulomb" && has_kinetic) {
           law.parameters["kinetic_friction_coefficient"] =
               friction->parameters.at("friction_coefficient");
-          *friction = law;
-          present = friction;
-        } else {
-          present = laws.insert(friction, law);
         }
-      } else if (effect.law == "wet_film") {
-        present = laws.insert(friction, dem::LawSpec{effect.law, {}});
+        *friction = law;
+        present = friction;
       } else {
-        present = laws.insert(friction == laws.end() ? laws.end() : friction + 1,
-                              dem::LawSpec{effect.law, {}});
+        present = laws.insert(later, dem::LawSpec{effect.law, {}});
       }
     }
     for (const auto& [key, value] : effect.parameters) present->parameters[key] = value;
-    if (present->name == "static_kinetic_friction" &&
+    const auto kinetic = present->parameters.find("kinetic_friction_coefficient");
+    const auto resting = present->parameters.find("static_friction_coefficient");
+    if (kinetic != present->parameters.end() && resting != present->parameters.end() &&
         !effect.parameters.contains("kinetic_friction_coefficient")) {
       // A resting friction below the inherited sliding one is a lower friction throughout.
-      double& kinetic = present->parameters["kinetic_friction_coefficient"];
-      kinetic = std::min(kinetic, present->parameters.at("static_friction_coefficient"));
+      kinetic->second = std::min(kinetic->second, resting->second);
     }
   }
   return spec;
 }
 
-dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& effect) {
+dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& effect,
+                                const dem::LawRegistry& registry) {
   dem::ModelSpec spec = base;
   if (effect.law.empty()) return spec;
+  if (registry.find_bond_law(effect.law) == nullptr) {
+    throw std::invalid_argument("'" + effect.law + "' is not a bond law of the effect library");
+  }
   for (dem::InteractionSpec& interaction : spec.interactions) {
     if (!interaction.bond_law) continue;
     interaction.bond_law->name = effect.law;
@@ -381,11 +388,15 @@ dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& 
   return spec;
 }
 
+bool loads_contacts(ExperimentType experiment) {
+  return experiment == ExperimentType::kSlide || experiment == ExperimentType::kLineTracks;
+}
+
 dem::ModelSpec with_experiment_effect(const dem::ModelSpec& base, ExperimentType experiment,
-                                      const HiddenEffect& effect) {
-  const bool contact =
-      experiment == ExperimentType::kSlide || experiment == ExperimentType::kLineTracks;
-  return contact ? with_contact_effect(base, effect) : with_bond_effect(base, effect);
+                                      const HiddenEffect& effect,
+                                      const dem::LawRegistry& registry) {
+  return loads_contacts(experiment) ? with_contact_effect(base, effect, registry)
+                                    : with_bond_effect(base, effect, registry);
 }
 
 std::string effect_config_snippet(const dem::ModelSpec& base, ExperimentType experiment,

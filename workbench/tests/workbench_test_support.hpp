@@ -69,28 +69,27 @@ inline GeneratedDataset generate_bend(const std::string& effect, std::uint64_t s
 }
 
 // The overall score (RMS over noise) of `channel` for the twin `Model` on the base model's
-// spec changed by `with_effect`.
-template <typename Model, typename WithEffect>
-double twin_score(const Dataset& data, const HiddenEffect& effect, const WithEffect& with_effect,
-                  std::string_view channel) {
+// spec with `effect` where the dataset's experiment puts it.
+template <typename Model>
+double twin_score(const Dataset& data, const HiddenEffect& effect, std::string_view channel) {
   model_tests::CommonParams common = base_model();
-  common.base_spec = with_effect(common.base_spec, effect);
+  common.base_spec = with_experiment_effect(common.base_spec, data.experiment, effect);
   Model model(common);
   return compare(data, model).overall(channel).score;
 }
 
 // The overall scores of the twins with a bond or contact `effect` added ({}: the base model).
 inline double force_score(const Dataset& data, const HiddenEffect& effect) {
-  return twin_score<TwinCompressModel>(data, effect, with_bond_effect, "force");
+  return twin_score<TwinCompressModel>(data, effect, "force");
 }
 inline double angle_score(const Dataset& data, const HiddenEffect& effect) {
-  return twin_score<TwinSlideModel>(data, effect, with_contact_effect, "onset_angle");
+  return twin_score<TwinSlideModel>(data, effect, "onset_angle");
 }
 inline double height_score(const Dataset& data, const HiddenEffect& effect) {
-  return twin_score<TwinDropModel>(data, effect, with_bond_effect, "height");
+  return twin_score<TwinDropModel>(data, effect, "height");
 }
 inline double bend_score(const Dataset& data, const HiddenEffect& effect) {
-  return twin_score<TwinBendModel>(data, effect, with_bond_effect, "bend_angle");
+  return twin_score<TwinBendModel>(data, effect, "bend_angle");
 }
 
 // Issue 6's proof on a dataset made with a hidden effect: diagnose ranks that effect first and

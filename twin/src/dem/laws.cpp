@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "bpm_vector_kernel.hpp"
+#include "fl/twin/dem/model.hpp"
 #include "fl/twin/dem/state.hpp"
 
 namespace fl::dem {
@@ -890,6 +891,46 @@ std::unique_ptr<BondLaw> LawRegistry::create_bond_law(std::string_view name,
   return info->factory(complete_parameters(*info, parameters), material);
 }
 
+namespace {
+
+// The parameters sample_*_law builds a law with (see laws.hpp).
+template <typename Law>
+LawParameters representative_parameters(const LawInfo<Law>& info) {
+  LawParameters parameters;
+  for (const LawParameterInfo& p : info.parameters) {
+    if (p.default_value) continue;
+    if (p.fit_range) {
+      const FitRange& range = *p.fit_range;
+      parameters[p.name] =
+          range.log_scale ? std::sqrt(range.min * range.max) : 0.5 * (range.min + range.max);
+    } else {
+      // The weakest allowed setting: a law's cross-checks bound a parameter from above by
+      // another (mu_k <= mu_s), never from below.
+      parameters[p.name] = p.min;
+    }
+  }
+  return parameters;
+}
+
+// The engine's default material (the fillet's, appendix B) on itself.
+PairMaterial sample_material() { return make_pair_material(Material{}, Material{}, false); }
+
+}  // namespace
+
+std::unique_ptr<ContactLaw> LawRegistry::sample_contact_law(std::string_view name) const {
+  const LawInfo<ContactLaw>* info = find_contact_law(name);
+  if (info == nullptr) {
+    throw std::invalid_argument("unknown contact law '" + std::string(name) + "'");
+  }
+  return create_contact_law(name, representative_parameters(*info), sample_material());
+}
+
+std::unique_ptr<BondLaw> LawRegistry::sample_bond_law(std::string_view name) const {
+  const LawInfo<BondLaw>* info = find_bond_law(name);
+  if (info == nullptr) throw std::invalid_argument("unknown bond law '" + std::string(name) + "'");
+  return create_bond_law(name, representative_parameters(*info), sample_material());
+}
+
 // One line per law: adding a law is its class plus one line here.
 void register_builtin_laws(LawRegistry& registry) {
   constexpr double kHuge = 1e308;
@@ -917,35 +958,47 @@ void register_builtin_laws(LawRegistry& registry) {
   };
   registry.add_bond_law({"bpm", "bonded particle model, eqs. 3.4-3.5, no damping, no moments",
                          bpm_parameters, make_bond_law<BondedParticleModel<ElasticNormal>>});
-  // effects (off unless configured): see the classes for the physics
+  // Effects (off unless configured): see the classes for the physics. Their fit ranges are
+  // wide enough for any fillet, not a generator's: a Maxwell arm over four decades of
+  // stiffness and relaxation times from a millisecond impact to a ten-second hold; a yield
+  // stress over four decades; grading referred to a thickness from the tip's 15 mm to the
+  // rear's 45 mm, from uniform to cubic (a plate's bending stiffness goes with t^3); resting
+  // friction 0.1 to 3 (slide onset 6 to 72 deg) with contacts counted as resting below 0.1 to
+  // 100 mm/s; a film taking none to 95 % of the friction load; rolling friction over three
+  // decades up to 1.
   registry.add_bond_law(
       {"bpm_viscoelastic", "bpm with a Maxwell arm in the normal direction (relaxation)",
-       with({{"relaxation_stiffness_n_per_m3", "N/m^3", 1e-30, kHuge, std::nullopt},
-             {"relaxation_time_s", "s", 1e-9, 1e9, std::nullopt}}),
+       with({{"relaxation_stiffness_n_per_m3", "N/m^3", 1e-30, kHuge, std::nullopt,
+              FitRange{1e4, 1e8, true}},
+             {"relaxation_time_s", "s", 1e-9, 1e9, std::nullopt, FitRange{1e-3, 10.0, true}}}),
        make_bond_law<BondedParticleModel<MaxwellNormal>>});
   registry.add_bond_law({"bpm_plastic", "bpm, perfectly plastic beyond a normal yield stress",
-                         with({{"normal_yield_strength_pa", "Pa", 1e-30, kHuge, std::nullopt}}),
+                         with({{"normal_yield_strength_pa", "Pa", 1e-30, kHuge, std::nullopt,
+                                FitRange{1.0, 1e4, true}}}),
                          make_bond_law<BondedParticleModel<PlasticNormal>>});
   registry.add_bond_law(
       {"bpm_graded", "bpm with stiffnesses graded by the fillet's local thickness (t/t_ref)^n",
-       with({{"reference_thickness_m", "m", 1e-4, 1.0, std::nullopt},
-             {"thickness_exponent", "-", -4.0, 4.0, std::nullopt}}),
+       with({{"reference_thickness_m", "m", 1e-4, 1.0, std::nullopt, FitRange{0.015, 0.045, false}},
+             {"thickness_exponent", "-", -4.0, 4.0, std::nullopt, FitRange{0.0, 3.0, false}}}),
        make_bond_law<BondedParticleModel<ElasticNormal, ThicknessGradedStiffness>>});
-  registry.add_contact_law({"rolling_resistance",
-                            "constant directional rolling torque mu_r R* |load|",
-                            {{"rolling_friction", "-", 0.0, 10.0, std::nullopt}},
-                            make_contact_law<RollingResistance>});
-  registry.add_contact_law({"static_kinetic_friction",
-                            "friction limit mu_s at rest and mu_k while slipping",
-                            {{"static_friction_coefficient", "-", 0.0, 100.0, std::nullopt},
-                             {"kinetic_friction_coefficient", "-", 0.0, 100.0, std::nullopt},
-                             {"stick_speed_m_per_s", "m/s", 1e-9, 10.0, 1e-3}},
-                            make_contact_law<StaticKineticFriction>});
-  registry.add_contact_law({"wet_film",
-                            "lubricating wet film with capillary attraction",
-                            {{"lubrication", "-", 0.0, 1.0, std::nullopt},
-                             {"surface_tension_n_per_m", "N/m", 0.0, 1.0, 0.0}},
-                            make_contact_law<WetFilm>});
+  registry.add_contact_law(
+      {"rolling_resistance",
+       "constant directional rolling torque mu_r R* |load|",
+       {{"rolling_friction", "-", 0.0, 10.0, std::nullopt, FitRange{1e-3, 1.0, true}}},
+       make_contact_law<RollingResistance>});
+  registry.add_contact_law(
+      {"static_kinetic_friction",
+       "friction limit mu_s at rest and mu_k while slipping",
+       {{"static_friction_coefficient", "-", 0.0, 100.0, std::nullopt, FitRange{0.1, 3.0, true}},
+        {"kinetic_friction_coefficient", "-", 0.0, 100.0, std::nullopt},
+        {"stick_speed_m_per_s", "m/s", 1e-9, 10.0, 1e-3, FitRange{1e-4, 0.1, true}}},
+       make_contact_law<StaticKineticFriction>});
+  registry.add_contact_law(
+      {"wet_film",
+       "lubricating wet film with capillary attraction",
+       {{"lubrication", "-", 0.0, 1.0, std::nullopt, FitRange{0.0, 0.95, false}},
+        {"surface_tension_n_per_m", "N/m", 0.0, 1.0, 0.0}},
+       make_contact_law<WetFilm>});
 }
 
 }  // namespace fl::dem

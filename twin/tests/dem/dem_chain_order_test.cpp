@@ -113,3 +113,30 @@ TEST(DemChainOrder, AdhesionWithoutTheLawItCorrectsIsRefused) {
 
 }  // namespace
 }  // namespace fl::dem
+
+namespace fl::dem {
+namespace {
+
+// What places an effect in a chain before any model exists (the workbench's diagnose) asks a
+// sampled law its stage: every registered law must build from its representative parameters,
+// and each answers the stage its class declares.
+TEST(DemChainOrder, EveryRegisteredLawCanBeAskedItsStageBeforeAModelExists) {
+  const LawRegistry& registry = LawRegistry::builtin();
+  for (const std::string& name : registry.contact_law_names()) {
+    EXPECT_NO_THROW((void)registry.sample_contact_law(name)) << name;
+  }
+  for (const std::string& name : registry.bond_law_names()) {
+    EXPECT_NO_THROW((void)registry.sample_bond_law(name)) << name;
+  }
+  EXPECT_EQ(registry.sample_contact_law("hertz_mindlin")->chain_stage(), ChainStage::kNormal);
+  EXPECT_EQ(registry.sample_contact_law("wet_film")->chain_stage(), ChainStage::kLoadModifier);
+  EXPECT_EQ(registry.sample_contact_law("static_kinetic_friction")->chain_stage(),
+            ChainStage::kFriction);
+  EXPECT_TRUE(registry.sample_bond_law("bpm_graded")->needs_bond_thickness());
+  EXPECT_FALSE(registry.sample_bond_law("bpm")->needs_bond_thickness());
+  EXPECT_THROW((void)registry.sample_contact_law("no_such_law"), std::invalid_argument);
+  EXPECT_THROW((void)registry.sample_bond_law("coulomb"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace fl::dem

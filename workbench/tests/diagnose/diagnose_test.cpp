@@ -27,7 +27,8 @@ TEST(Diagnose, FindsEachHiddenEffectAndTheErrorFalls) {
     SCOPED_TRACE(effect);
     const GeneratedDataset made = test::generate(effect, static_cast<std::uint64_t>(seed));
     const Dataset& data = made.dataset;
-    const Diagnosis diagnosis = diagnose(data, base_model(), compress_candidates());
+    const Diagnosis diagnosis =
+        diagnose(data, base_model(), candidates_for(ExperimentType::kCompress));
     ASSERT_FALSE(diagnosis.ranked.empty());
     EXPECT_EQ(diagnosis.ranked.front().law, made.truth.law) << diagnosis.verdict;
     EXPECT_TRUE(diagnosis.ranked.front().proposed) << diagnosis.verdict;
@@ -52,7 +53,8 @@ TEST(Diagnose, FindsItThroughAFastLoggersDisplacementNoise) {
   options.compress_row_s = 1e-4;
   options.common = base_model();
   const GeneratedDataset made = generate_dataset(options);
-  const Diagnosis diagnosis = diagnose(made.dataset, base_model(), compress_candidates());
+  const Diagnosis diagnosis =
+      diagnose(made.dataset, base_model(), candidates_for(ExperimentType::kCompress));
   ASSERT_FALSE(diagnosis.ranked.empty());
   EXPECT_EQ(diagnosis.ranked.front().law, made.truth.law) << diagnosis.verdict;
   EXPECT_TRUE(diagnosis.ranked.front().proposed) << diagnosis.verdict;
@@ -64,7 +66,8 @@ TEST(Diagnose, FindsItThroughAFastLoggersDisplacementNoise) {
 
 TEST(Diagnose, ProposesNothingWhenResidualsAreAtTheNoise) {
   const Dataset data = test::generate("none", 13).dataset;
-  const Diagnosis diagnosis = diagnose(data, base_model(), compress_candidates());
+  const Diagnosis diagnosis =
+      diagnose(data, base_model(), candidates_for(ExperimentType::kCompress));
   for (const CandidateResult& result : diagnosis.ranked) EXPECT_FALSE(result.proposed);
   EXPECT_TRUE(proposed_effect(diagnosis).law.empty());
   EXPECT_NE(diagnosis.verdict.find("nothing missing"), std::string::npos) << diagnosis.verdict;
@@ -75,7 +78,8 @@ TEST(Diagnose, ProposesNothingWhenResidualsAreAtTheNoise) {
 // was proposed (RMS down 82 %). The refitted base is the null every effect must beat.
 TEST(Diagnose, ABaseStiffnessOffIsABaseErrorNotAMissingEffect) {
   const Dataset data = test::stiffer_bonds_compression();  // 1.8 times the model's stiffness
-  const Diagnosis diagnosis = diagnose(data, base_model(), compress_candidates());
+  const Diagnosis diagnosis =
+      diagnose(data, base_model(), candidates_for(ExperimentType::kCompress));
   EXPECT_TRUE(diagnosis.base_off) << diagnosis.verdict;
   EXPECT_TRUE(proposed_effect(diagnosis).law.empty());
   const auto null =
@@ -102,7 +106,7 @@ TEST(Diagnose, RefusesWhatItCannotJudge) {
   options.trials = 1;
   options.common = base_model();
   const Dataset one_trial = generate_dataset(options).dataset;
-  EXPECT_THROW((void)diagnose(one_trial, base_model(), compress_candidates()),
+  EXPECT_THROW((void)diagnose(one_trial, base_model(), candidates_for(ExperimentType::kCompress)),
                std::invalid_argument);
 }
 

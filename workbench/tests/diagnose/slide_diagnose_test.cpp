@@ -1,7 +1,7 @@
 // The proof issue 6 asks for, on slide data: a dataset made with a hidden contact effect gets
 // that effect ranked first and proposed; adding it with the fitted parameters makes the error
 // fall by 70 % or more and end within twice the noise; a dataset without a hidden effect gets
-// nothing proposed. The candidates' bounds are the diagnosis' own (slide_candidates: decades
+// nothing proposed. The candidates' bounds are the diagnosis' own (candidates_for: decades
 // wide), not the generator's ranges.
 #include <gtest/gtest.h>
 
@@ -78,8 +78,9 @@ TEST(SlideDiagnose, AnEnsembleIsJudgedByTheLikelihoodOfItsRepetitions) {
   DiagnoseOptions options;
   options.max_evaluations = 4;
   options.twin.slide.ensemble_runs = 2;
-  const std::vector<EffectCandidate> candidates{slide_candidates().back()};
-  ASSERT_EQ(candidates[0].law, "rolling_resistance");
+  std::vector<EffectCandidate> candidates = candidates_for(ExperimentType::kSlide);
+  std::erase_if(candidates, [](const EffectCandidate& c) { return c.law != "rolling_resistance"; });
+  ASSERT_EQ(candidates.size(), 1U);
   const Diagnosis diagnosis = diagnose(data, test::base_model(), candidates, options);
   EXPECT_EQ(diagnosis.score, "repetition_likelihood");
   EXPECT_EQ(diagnosis.placement, "laid_once");  // the generator lays the fillet once

@@ -45,15 +45,15 @@ inline constexpr std::string_view kRecalibratedBase = "recalibrated_base";
 std::optional<EffectCandidate> recalibration_candidate(ExperimentType type,
                                                        const dem::ModelSpec& base);
 
-// The effect library's candidates for a compression dataset, with bounds wide enough for any
-// fillet (three to four decades), not the generator's ranges.
-std::vector<EffectCandidate> compress_candidates();
-// The contact-law effects for a slide dataset (static_kinetic_friction, wet_film,
-// rolling_resistance), bounds as wide.
-std::vector<EffectCandidate> slide_candidates();
-// The candidates of a dataset's experiment (drop: compress_candidates, a drop loads the same
-// bonds at impact rates); throws std::invalid_argument for other types.
-std::vector<EffectCandidate> candidates_for(ExperimentType type);
+// The effect library's candidates for a dataset's experiment: every law of the registry with a
+// fit range (dem::LawInfo::is_effect) of the kind the experiment's twin loads (loads_contacts:
+// contact laws, else bond laws; a bond law that reads bond thickness only where the specimen
+// is a fillet, not compress's block), each searched over its fit ranges (wide enough for any
+// fillet, not the generator's ranges). A law registered with fit ranges is thereby a candidate
+// with no change here. Throws std::invalid_argument for an experiment diagnose does not judge
+// (bulk flow).
+std::vector<EffectCandidate> candidates_for(
+    ExperimentType type, const dem::LawRegistry& registry = dem::LawRegistry::builtin());
 
 struct CandidateResult {
   std::string law;

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "fl/controller/line_config.hpp"
+#include "fl/twin/dem/laws.hpp"
 #include "fl/twin/dem_plant/dem_plant_config.hpp"
 #include "fl/twin/model_tests/fixtures.hpp"
 #include "fl/workbench/dataset.hpp"
@@ -97,20 +98,28 @@ struct GeneratedDataset {
 GeneratedDataset generate_dataset(const GeneratorOptions& options);
 
 // The base model's spec with an effect's bond law in place of bpm (parameters kept, the
-// effect's added). Shared by the generator and by what fits effects.
-dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& effect);
+// effect's added). Shared by the generator and by what fits effects. Throws
+// std::invalid_argument when the law is not a bond law of the registry.
+dem::ModelSpec with_bond_effect(const dem::ModelSpec& base, const HiddenEffect& effect,
+                                const dem::LawRegistry& registry = dem::LawRegistry::builtin());
 
-// The base model's spec with a contact-law effect in every fillet-equipment chain, at its place
-// in the chain (docs/twin.md): static_kinetic_friction replaces coulomb (its kinetic
-// coefficient, when the effect does not give it, is the replaced coulomb's: the base model's
-// friction is the sliding one; capped at the static one), wet_film goes before the friction law,
-// rolling_resistance after it. A law already in the chain gets the effect's parameters. Throws
-// std::invalid_argument for another law.
-dem::ModelSpec with_contact_effect(const dem::ModelSpec& base, const HiddenEffect& effect);
-// The effect where the experiment's candidates go: a bond law for compress, the
-// fillet-equipment contact chain for slide.
-dem::ModelSpec with_experiment_effect(const dem::ModelSpec& base, ExperimentType experiment,
-                                      const HiddenEffect& effect);
+// The base model's spec with a contact-law effect in every fillet-equipment chain, placed by
+// its chain stage (docs/twin.md): after the chain's laws of its own and earlier stages, except
+// that a friction law replaces the chain's friction law (one limit on the tangential force);
+// replacing coulomb, a parameter kinetic_friction_coefficient the effect does not give is
+// coulomb's coefficient (the base model's friction is the sliding one), capped at a static one.
+// A law already in the chain gets the effect's parameters. Throws std::invalid_argument when
+// the law is not a contact law of the registry.
+dem::ModelSpec with_contact_effect(const dem::ModelSpec& base, const HiddenEffect& effect,
+                                   const dem::LawRegistry& registry = dem::LawRegistry::builtin());
+// Whether the experiment's twin is judged on how fillets touch the machine (slide, line
+// tracks: contact-law effects) rather than on how they deform (the others: bond-law effects).
+[[nodiscard]] bool loads_contacts(ExperimentType experiment);
+// The effect where the experiment's candidates go: the fillet-equipment contact chain where
+// loads_contacts, else the bond law.
+dem::ModelSpec with_experiment_effect(
+    const dem::ModelSpec& base, ExperimentType experiment, const HiddenEffect& effect,
+    const dem::LawRegistry& registry = dem::LawRegistry::builtin());
 
 // What to paste into the DEM config (config/dem.yaml's layout) to add an effect as
 // with_experiment_effect does: for a contact effect the items of the resulting fillet-equipment

@@ -24,17 +24,22 @@
 //   };
 //   // 2. in register_builtin_laws() (twin/src/dem/laws.cpp):
 //   registry.add_contact_law({"speed_weakening", "friction falling with sliding speed",
-//                             {{"friction_drop_per_m_per_s", "s/m", 0.0, 100.0, std::nullopt}},
+//                             {{"friction_drop_per_m_per_s", "s/m", 0.0, 100.0, std::nullopt,
+//                               FitRange{0.01, 10.0, true}}},
 //                             make_contact_law<SpeedWeakening>});
 //
 // The YAML reader (config.hpp) then accepts `speed_weakening: {friction_drop_per_m_per_s: 2}`
 // in an interaction's contact chain (before coulomb) with strict range checks taken from the
-// parameter list; its chain stage tells Model where in a chain the law may stand.
+// parameter list; its chain stage tells Model where in a chain the law may stand. The fit range
+// makes it an effect: `linectl diagnose` fits it as a candidate on every dataset whose twin
+// loads that kind of law (contact laws: slide and line tracks; bond laws: compress, drop,
+// settle, bend), and places it in the chain by its stage.
 //
 // Units are SI (m, kg, s, N); names carry units where not obvious.
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -240,13 +245,25 @@ class BondLaw {
   [[nodiscard]] virtual bool needs_bond_thickness() const { return false; }
 };
 
-// A parameter a law accepts, with its allowed closed range and optional default.
+// Where a fit searches a parameter when its law is tried as a missing effect (the workbench's
+// diagnose): a range any fillet on any machine stays inside, searched on a log scale where it
+// spans decades. Not the law's allowed range, which only keeps the physics defined.
+struct FitRange {
+  double min = 0.0;
+  double max = 0.0;
+  bool log_scale = false;
+};
+
+// A parameter a law accepts, with its allowed closed range, optional default and, for an effect
+// diagnose may propose, the range a fit searches. A law with any fitted parameter is an effect;
+// its other parameters keep their configured, default or inherited values during the fit.
 struct LawParameterInfo {
   std::string name;
   std::string unit;
   double min = 0.0;
   double max = 0.0;
   std::optional<double> default_value;
+  std::optional<FitRange> fit_range = std::nullopt;
 };
 
 template <typename Law>
@@ -255,6 +272,12 @@ struct LawInfo {
   std::string description;
   std::vector<LawParameterInfo> parameters;
   std::function<std::unique_ptr<Law>(const LawParameters&, const PairMaterial&)> factory;
+
+  // An effect: a law diagnose fits (some parameter has a fit range), not a base law.
+  [[nodiscard]] bool is_effect() const {
+    return std::any_of(parameters.begin(), parameters.end(),
+                       [](const LawParameterInfo& p) { return p.fit_range.has_value(); });
+  }
 };
 
 template <typename Law, typename Impl>
@@ -291,6 +314,13 @@ class LawRegistry {
   [[nodiscard]] std::unique_ptr<BondLaw> create_bond_law(std::string_view name,
                                                          const LawParameters& parameters,
                                                          const PairMaterial& material) const;
+
+  // A law built with representative parameters (its defaults, the middle of its fit ranges,
+  // else its allowed minimum) on the default fillet material, to ask what the
+  // class declares before any model exists: a contact law's chain stage, whether a bond law
+  // reads bond thickness. Throws std::invalid_argument for an unknown name.
+  [[nodiscard]] std::unique_ptr<ContactLaw> sample_contact_law(std::string_view name) const;
+  [[nodiscard]] std::unique_ptr<BondLaw> sample_bond_law(std::string_view name) const;
 
  private:
   std::map<std::string, LawInfo<ContactLaw>, std::less<>> contact_laws_;
