@@ -46,17 +46,8 @@ class ScanLog {
     const auto after = std::upper_bound(time_s_.begin(), time_s_.end(), time_s);
     const std::size_t k =
         after == time_s_.begin() ? 0 : static_cast<std::size_t>(after - time_s_.begin()) - 1;
-    const double s_mm = s_m / kMm;
-    for (std::size_t d = 0; d < kDriveCount; ++d) {
-      const auto id = static_cast<DriveId>(d);
-      if (!has_section(id) || s_mm < line_.sections[d].start_mm ||
-          s_mm >= line_.sections[d].end_mm) {
-        continue;
-      }
-      const bool unit = id == DriveId::kMultilane1Left || id == DriveId::kMultilane2Left;
-      return unit ? 0.5 * (speed_mps_[k][d] + speed_mps_[k][d + 1]) : speed_mps_[k][d];
-    }
-    return 0.0;
+    return carrying_speed(line_, s_m / kMm,
+                          [&](DriveId drive) { return speed_mps_[k][index(drive)]; });
   }
 
   // The line log (docs/measurements.md, machine: line): time, every belt of the path at its

@@ -122,13 +122,7 @@ std::vector<std::string> belt_phases(const Trial& trial) {
     return phase;
   }
   const std::vector<double>& log_t = trial.commands->at("time").values_si;
-  const Channel* speed = nullptr;
-  for (const Channel& channel : trial.commands->channels) {
-    if (channel.name != "time" && channel.unit.quantity == Quantity::kSpeed) {
-      speed = &channel;
-      break;
-    }
-  }
+  const Channel* speed = belt_log_speed(*trial.commands);
   if (speed == nullptr || log_t.size() < 2) return phase;
   // A belt changing speed by under a hundredth of g is steady: a drive's ripple, not a takt.
   constexpr double kSteadyMps2 = 0.1;

@@ -599,6 +599,13 @@ const Channel& Table::at(std::string_view name) const {
   return *channel;
 }
 
+const Channel* belt_log_speed(const Table& log) {
+  for (const Channel& channel : log.channels) {
+    if (channel.name != "time" && channel.unit.quantity == Quantity::kSpeed) return &channel;
+  }
+  return nullptr;
+}
+
 std::string DatasetProblem::to_string() const {
   std::string text = file;
   if (line > 0) text += ":" + std::to_string(line);

@@ -466,17 +466,6 @@ std::string_view line_tracks_channel_without_noise(const Dataset& dataset) {
 
 namespace {
 
-double log_value_at(const std::vector<double>& time_s, const std::vector<double>& value,
-                    double at_s, bool linear) {
-  if (at_s <= time_s.front()) return value.front();
-  if (at_s >= time_s.back()) return value.back();
-  const auto after = std::upper_bound(time_s.begin(), time_s.end(), at_s);
-  const auto k = static_cast<std::size_t>(after - time_s.begin());
-  if (!linear) return value[k - 1];
-  const double share = (at_s - time_s[k - 1]) / (time_s[k] - time_s[k - 1]);
-  return value[k - 1] + share * (value[k] - value[k - 1]);
-}
-
 // The line's commands at a time from a line log (dataset.hpp, machine: line): belt speeds
 // linear between rows as logged every scan, stations held from the row before.
 OutputImage line_commands_at(const Table& log, double time_s) {
@@ -484,17 +473,18 @@ OutputImage line_commands_at(const Table& log, double time_s) {
   OutputImage out{};
   for (std::size_t d = 0; d < kDriveCount; ++d) {
     if (const Channel* speed = log.find(kDriveNames[d]); speed != nullptr) {
-      out.drives[d].speed_mps = static_cast<float>(log_value_at(t, speed->values_si, time_s, true));
+      out.drives[d].speed_mps =
+          static_cast<float>(model_tests::logged_value_at(t, speed->values_si, time_s, true));
     }
   }
   for (const LineLogFlag& flag : kLineLogFlags) {
     const Channel* channel = log.find(flag.column);
-    out.*flag.field =
-        channel != nullptr && log_value_at(t, channel->values_si, time_s, false) > 0.5;
+    out.*flag.field = channel != nullptr &&
+                      model_tests::logged_value_at(t, channel->values_si, time_s, false) > 0.5;
   }
   if (const Channel* shift = log.find(kLineLogCentringShift); shift != nullptr) {
     out.centring_shift_mm =
-        static_cast<float>(log_value_at(t, shift->values_si, time_s, false) * 1e3);
+        static_cast<float>(model_tests::logged_value_at(t, shift->values_si, time_s, false) * 1e3);
   }
   return out;
 }
@@ -553,13 +543,9 @@ Table TwinLineTracksModel::run(const Dataset& dataset, const Trial& trial) {
   keep_wet_film_for_wet_trials(params.common.base_spec, trial.conditions);
   if (on_line) {
     // The line's log is replayed by run_on_line.
-  } else if (trial.commands && trial.commands->channels.size() >= 2) {
+  } else if (const Channel* logged = trial.commands ? belt_log_speed(*trial.commands) : nullptr) {
     params.command_time_s = trial.commands->at("time").values_si;
-    for (const Channel& channel : trial.commands->channels) {
-      if (channel.name == "time") continue;
-      params.belt_speed_m_per_s = channel.values_si;  // the first speed column drives the belt
-      break;
-    }
+    params.belt_speed_m_per_s = logged->values_si;
   } else {
     const auto speed = trial.conditions.find("belt_speed");
     if (speed == trial.conditions.end()) {

@@ -2,6 +2,19 @@
 
 namespace fl {
 
+DriveId drive_under(const LineConfig& line, double s_mm) {
+  // Flow order is DriveId order (config_loader's check_sections); takt is the first belt.
+  DriveId before = DriveId::kTakt;
+  for (std::size_t d = 0; d < kDriveCount; ++d) {
+    const auto id = static_cast<DriveId>(d);
+    if (!has_section(id)) continue;
+    if (s_mm < line.sections[d].start_mm) return before;
+    if (s_mm < line.sections[d].end_mm) return id;
+    before = id;
+  }
+  return before;
+}
+
 LineConfig default_line_config() {
   LineConfig config;
   auto section = [&](DriveId id, float start_mm, float end_mm, float speed_mps) {

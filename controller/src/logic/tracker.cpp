@@ -70,21 +70,6 @@ void Tracker::reset() {
   outcome_counts_.fill(0);
 }
 
-DriveId Tracker::drive_at(float s_mm) const {
-  const auto& sections = config_.sections;
-  if (s_mm < sections[index(DriveId::kTakt)].end_mm) return DriveId::kTakt;
-  if (s_mm < sections[index(DriveId::kTransition1)].end_mm) return DriveId::kTransition1;
-  if (s_mm < sections[index(DriveId::kTransition2)].end_mm) return DriveId::kTransition2;
-  // The flip plates between guide and reject belt are slides fed at guide speed.
-  if (s_mm < sections[index(DriveId::kReject)].start_mm) return DriveId::kGuide;
-  if (s_mm < sections[index(DriveId::kReject)].end_mm) return DriveId::kReject;
-  if (s_mm < sections[index(DriveId::kCentring)].end_mm) return DriveId::kCentring;
-  if (s_mm < sections[index(DriveId::kMultilane1Left)].end_mm) return DriveId::kMultilane1Left;
-  if (s_mm < sections[index(DriveId::kMultilane2Left)].end_mm) return DriveId::kMultilane2Left;
-  if (s_mm < sections[index(DriveId::kSqueeze)].end_mm) return DriveId::kSqueeze;
-  return DriveId::kOutfeed;
-}
-
 void Tracker::advance(const InputImage& in) {
   for (std::size_t d = 0; d < kDriveCount; ++d) {
     const std::int64_t counts = in.drives[d].encoder_counts;
@@ -141,26 +126,13 @@ bool Tracker::confirm_unmatched(CameraId camera, float s_mm, std::int64_t time_n
   return true;
 }
 
-namespace {
-// The belt that carries an item together with `drive`: a multilane unit's right belt
-// beside its left one; any other belt carries it alone.
-DriveId partner_of(DriveId drive) {
-  if (drive == DriveId::kMultilane1Left) return DriveId::kMultilane1Right;
-  if (drive == DriveId::kMultilane2Left) return DriveId::kMultilane2Right;
-  return drive;
-}
-}  // namespace
-
 float Tracker::travel_at_mm(float s_mm) const {
-  // A multilane unit carries the item forward at the mean of its two belts (for a single
-  // belt the mean of it with itself is exactly its own value).
-  const DriveId drive = drive_at(s_mm);
-  return 0.5F * (travel_mm(drive) + travel_mm(partner_of(drive)));
+  return carrying_speed(config_, s_mm, [this](DriveId drive) { return travel_mm(drive); });
 }
 
 float Tracker::speed_at_mps(const InputImage& in, float s_mm) const {
-  const DriveId drive = drive_at(s_mm);
-  return 0.5F * (in.drives[index(drive)].speed_mps + in.drives[index(partner_of(drive))].speed_mps);
+  return carrying_speed(config_, s_mm,
+                        [&in](DriveId drive) { return in.drives[index(drive)].speed_mps; });
 }
 
 Item* Tracker::create(std::int64_t time_ns, float s_mm, bool adopted) {

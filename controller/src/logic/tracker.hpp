@@ -171,10 +171,6 @@ class Tracker {
     return has_frame_[index(camera)];
   }
 
-  // Drive whose belt carries an item at line position s (guide for the flip plates, the
-  // left belt of a multilane unit).
-  [[nodiscard]] DriveId drive_at(float s_mm) const;
-
  private:
   Item* nearest_item(float s_mm, float gate_mm);
   // Counts an unmatched detection of frame `sequence`; returns true once it is confirmed by

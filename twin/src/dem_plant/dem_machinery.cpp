@@ -137,17 +137,6 @@ void DemPlant::command_walls(double h_s) {
   if (teleported) sim_->prepare();  // new wall geometry without a motion step
 }
 
-DriveId DemPlant::drive_under(double s_m) const {
-  const double s_mm = s_m / kMm;
-  for (std::size_t d = 0; d < kDriveCount; ++d) {
-    const BeltSection& section = line_.sections[d];
-    if (section.end_mm > section.start_mm && s_mm >= section.start_mm && s_mm < section.end_mm) {
-      return static_cast<DriveId>(d);
-    }
-  }
-  return DriveId::kGuide;  // the plates convey at the guide's speed
-}
-
 void DemPlant::flip_sideways(Fillet& fillet) {
   // Simplification (see the header): plate 2 turns the fillet over in one go, a rigid
   // rotation by pi through its centroid about the travel direction down the plate's slope (the
@@ -246,7 +235,9 @@ void DemPlant::apply_events(const OutputImage& out) {
       f.progress_s_m = s_m;
       f.progress_ns = time_ns_;
     }
-    const bool belt_runs = std::abs(drives_.speed_mps(drive_under(s_m))) > 0.05;
+    const double carried_mps = carrying_speed(
+        line_, s_m / kMm, [this](DriveId drive) { return drives_.speed_mps(drive); });
+    const bool belt_runs = std::abs(carried_mps) > 0.05;
     if (!belt_runs) f.progress_ns = time_ns_;  // a held belt is not a stuck fillet
     // Exits.
     if (stations_.knife_blowing && std::abs(s_m - knife_m) <= knife_window_m) {

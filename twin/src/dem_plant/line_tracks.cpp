@@ -33,21 +33,6 @@ std::pair<double, double> path_extent_mm(const LineConfig& line) {
   return {lower, upper};
 }
 
-// The commanded surface speed under a point of the path: a multilane unit's mean of its two
-// belts (a fillet placed there moves with both).
-double belt_speed_mps(const LineConfig& line, const OutputImage& out, double s_mm) {
-  for (std::size_t d = 0; d < kDriveCount; ++d) {
-    const auto id = static_cast<DriveId>(d);
-    if (!has_section(id)) continue;
-    if (s_mm < line.sections[d].start_mm || s_mm >= line.sections[d].end_mm) continue;
-    if (id == DriveId::kMultilane1Left || id == DriveId::kMultilane2Left) {
-      return 0.5 * (out.drives[d].speed_mps + out.drives[d + 1].speed_mps);
-    }
-    return out.drives[d].speed_mps;
-  }
-  return 0.0;
-}
-
 // The log's commands as the plant takes them: every drive enabled at its configured ramp (the
 // log's own samples carry the profile), the infeed off.
 OutputImage plant_commands(const LineTracksRun& run, double time_s) {
@@ -143,7 +128,11 @@ LineTracksResult run_line_tracks(const LineTracksRun& run) {
       spawn.s_mm = start.s_mm;
       spawn.y_mm = start.y_mm;
       spawn.angle_rad = start.angle_rad;
-      spawn.v_mps = belt_speed_mps(run.line, out, start.s_mm);
+      // The commanded speed under it: a fillet placed there moves with the belt (both belts of
+      // a multilane unit).
+      spawn.v_mps = carrying_speed(run.line, start.s_mm, [&out](DriveId drive) {
+        return static_cast<double>(out.drives[index(drive)].speed_mps);
+      });
       spawn.variant = run.variant;
       spawn.side = run.side;
       group[f] = plant.spawn_fillet(spawn);

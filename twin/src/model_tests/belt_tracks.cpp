@@ -9,18 +9,23 @@
 #include "fl/twin/model_tests/model_tests.hpp"
 
 namespace fl::model_tests {
+
+double logged_value_at(const std::vector<double>& time_s, const std::vector<double>& value,
+                       double at_s, bool linear) {
+  if (at_s <= time_s.front()) return value.front();
+  if (at_s >= time_s.back()) return value.back();
+  const auto after = std::upper_bound(time_s.begin(), time_s.end(), at_s);
+  const auto k = static_cast<std::size_t>(after - time_s.begin());
+  if (!linear) return value[k - 1];
+  const double share = (at_s - time_s[k - 1]) / (time_s[k] - time_s[k - 1]);
+  return value[k - 1] + share * (value[k] - value[k - 1]);
+}
+
 namespace {
 
 double belt_speed_at(const BeltTracksParams& params, double time_s) {
-  const std::vector<double>& t = params.command_time_s;
-  const std::vector<double>& v = params.belt_speed_m_per_s;
-  if (t.empty()) return 0.0;
-  if (time_s <= t.front()) return v.front();
-  if (time_s >= t.back()) return v.back();
-  const auto after = std::upper_bound(t.begin(), t.end(), time_s);
-  const auto k = static_cast<std::size_t>(after - t.begin());
-  const double share = (time_s - t[k - 1]) / (t[k] - t[k - 1]);
-  return v[k - 1] + share * (v[k] - v[k - 1]);
+  if (params.command_time_s.empty()) return 0.0;
+  return logged_value_at(params.command_time_s, params.belt_speed_m_per_s, time_s);
 }
 
 // A tracked fillet: the creation numbers of its spheres (stable while the engine re-orders

@@ -150,6 +150,29 @@ struct LineConfig {
   WatchdogConfig watchdog;
 };
 
+// The drive whose belt carries a point of the product path: the section holding s_mm; in the
+// gap of the flip plates, the guide belt that feeds them (the section before a gap); upstream of
+// the first section the takt belt, downstream of the last the outfeed (the sections follow each
+// other in flow order, as the loader checks). A multilane unit answers its left drive.
+[[nodiscard]] DriveId drive_under(const LineConfig& line, double s_mm);
+
+// The belt that carries a fillet together with `drive`: a multilane unit's right belt beside
+// its left one; any other belt carries it alone (itself).
+constexpr DriveId carrying_partner(DriveId drive) {
+  if (drive == DriveId::kMultilane1Left) return DriveId::kMultilane1Right;
+  if (drive == DriveId::kMultilane2Left) return DriveId::kMultilane2Right;
+  return drive;
+}
+
+// The speed that carries a fillet forward at s_mm, from each drive's speed (`speed_of(DriveId)`:
+// commanded, measured, or an encoder's travel): a multilane unit's mean of its two belts, any
+// other belt's own (the mean of it with itself, exactly).
+template <typename SpeedOf>
+auto carrying_speed(const LineConfig& line, double s_mm, const SpeedOf& speed_of) {
+  const DriveId drive = drive_under(line, s_mm);
+  return (speed_of(drive) + speed_of(carrying_partner(drive))) / 2;
+}
+
 // The reference line of thesis section 5.3 with the project's chosen numbers (the figure
 // with the thesis' belt speeds is not legible in the text, docs/line.md gives the reasons).
 // config/line.yaml holds the same values; a test keeps the two equal.

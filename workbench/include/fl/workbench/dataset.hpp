@@ -63,6 +63,10 @@ struct Table {
   [[nodiscard]] const Channel& at(std::string_view name) const;
 };
 
+// The speed a lab belt's command log (machine: belt) drives the belt with: its first column
+// after time (every such column is a speed, as loading checks); nullptr when it has none.
+[[nodiscard]] const Channel* belt_log_speed(const Table& log);
+
 struct Trial {
   std::string id;
   Conditions conditions;  // the dataset's, overridden by the trial's own

@@ -258,7 +258,6 @@ class DemPlant final : public Plant {
   void command_walls(double h_s);
   void apply_events(const OutputImage& out);
   void flip_sideways(Fillet& fillet);
-  [[nodiscard]] DriveId drive_under(double s_m) const;
 
   // dem_feeder.cpp
   void step_infeed(double h_s, const OutputImage& out);

@@ -202,6 +202,12 @@ struct BeltPose {
   double yaw_rad = 0.0;  // of the fillet's long axis (its body x axis), unwrapped from the start
 };
 
+// A logged value at a time, as a command log drives a machine: linear between the samples
+// (`linear` false: held from the sample at or before), held before the first and after the
+// last. `time_s` ascending, as long as `value`, not empty.
+double logged_value_at(const std::vector<double>& time_s, const std::vector<double>& value,
+                       double at_s, bool linear = true);
+
 struct BeltTracksParams {
   CommonParams common;
   // Belt speed, piecewise linear between the points, held before the first and after the last.
