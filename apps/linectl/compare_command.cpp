@@ -462,7 +462,7 @@ int compare_command(const CompareArgs& args) {
   const CompareReport report = compare(dataset, *model);
   const fs::path out = out_folder(args, "compare_");
   write_report(report, out);
-  append_history(out / "history.csv", report, utc_now());
+  append_history(out / "history.csv", report, utc_now(), model_effects(inputs->common.base_spec));
   const std::vector<HistoryEntry> history = read_history(out / "history.csv");
   plot_history(history, out / "history.svg");
   for (std::size_t k = 0; k < std::min<std::size_t>(report.cells.size(), 5); ++k) {

@@ -5,6 +5,9 @@
 #include <charconv>
 #include <fstream>
 #include <map>
+#include <string>
+#include <string_view>
+#include <vector>
 
 #include "csv_reader.hpp"
 #include "fl/report/csv.hpp"
@@ -13,7 +16,27 @@
 namespace fl::workbench {
 namespace {
 
-constexpr const char* kHeader = "run_utc,dataset,channel,rmse_si,score,model";
+constexpr const char* kHeader = "run_utc,dataset,channel,rmse_si,score,model,effects";
+// The header before the effects column (histories written before 2026-12-06).
+constexpr std::string_view kHeaderWithoutEffects = "run_utc,dataset,channel,rmse_si,score,model";
+
+// Gives a history of the older layout the effects column, empty on its lines, so that the file
+// stays one table.
+void add_effects_column(const std::filesystem::path& csv) {
+  std::vector<std::string> lines;
+  {
+    std::ifstream in(csv, std::ios::binary);
+    std::string line;
+    while (std::getline(in, line)) lines.push_back(line);
+  }
+  if (lines.empty() || lines.front() != kHeaderWithoutEffects) return;
+  std::ofstream out(csv, std::ios::binary | std::ios::trunc);
+  out << kHeader << '\n';
+  for (std::size_t k = 1; k < lines.size(); ++k) {
+    if (!lines[k].empty()) out << lines[k] << ",\n";
+  }
+  if (!out) throw std::runtime_error("cannot rewrite " + csv.string());
+}
 
 bool parse_number(const std::string& text, double& value) {
   const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
@@ -23,8 +46,9 @@ bool parse_number(const std::string& text, double& value) {
 }  // namespace
 
 void append_history(const std::filesystem::path& csv, const CompareReport& report,
-                    const std::string& run_utc) {
+                    const std::string& run_utc, const std::string& effects) {
   const bool fresh = !std::filesystem::exists(csv);
+  if (!fresh) add_effects_column(csv);
   std::ofstream out(csv, std::ios::app | std::ios::binary);
   if (fresh) out << kHeader << '\n';
   for (const ErrorCell& cell : report.cells) {
@@ -32,7 +56,8 @@ void append_history(const std::filesystem::path& csv, const CompareReport& repor
     // RFC 4180 as report::CsvTable writes it: the model description holds commas.
     out << report::csv_quote(run_utc) << ',' << report::csv_quote(report.dataset) << ','
         << report::csv_quote(cell.channel) << ',' << report::format_double(cell.rmse_si) << ','
-        << report::format_double(cell.score) << ',' << report::csv_quote(report.model) << '\n';
+        << report::format_double(cell.score) << ',' << report::csv_quote(report.model) << ','
+        << report::csv_quote(effects) << '\n';
   }
   if (!out) throw std::runtime_error("cannot append to " + csv.string());
 }
@@ -48,7 +73,8 @@ std::vector<HistoryEntry> read_history(const std::filesystem::path& csv) {
   for (std::size_t k = 1; k < rows.size(); ++k) {
     const detail::CsvRow& row = rows[k];
     HistoryEntry entry;
-    if (row.fields.size() != 6 || !parse_number(row.fields[3], entry.rmse_si) ||
+    const std::size_t fields = row.fields.size();
+    if ((fields != 6 && fields != 7) || !parse_number(row.fields[3], entry.rmse_si) ||
         !parse_number(row.fields[4], entry.score)) {
       spdlog::warn("{}:{}: not a history line ({}), skipped", csv.string(), row.line, kHeader);
       continue;
@@ -57,6 +83,7 @@ std::vector<HistoryEntry> read_history(const std::filesystem::path& csv) {
     entry.dataset = row.fields[1];
     entry.channel = row.fields[2];
     entry.model = row.fields[5];
+    if (fields == 7) entry.effects = row.fields[6];
     history.push_back(std::move(entry));
   }
   return history;

@@ -648,6 +648,32 @@ Table TwinLineTracksModel::run(const Dataset& dataset, const Trial& trial) {
   return table;
 }
 
+std::string model_effects(const dem::ModelSpec& spec) {
+  const dem::LawRegistry& registry = dem::LawRegistry::builtin();
+  std::vector<std::string> effects;
+  const auto add = [&effects](const dem::LawSpec& law, bool is_effect) {
+    if (!is_effect) return;
+    std::string text = law_text(law);
+    if (std::find(effects.begin(), effects.end(), text) == effects.end()) {
+      effects.push_back(std::move(text));
+    }
+  };
+  for (const dem::InteractionSpec& interaction : spec.interactions) {
+    for (const dem::LawSpec& law : interaction.contact_laws) {
+      const auto* info = registry.find_contact_law(law.name);
+      add(law, info != nullptr && info->is_effect());
+    }
+    if (interaction.bond_law) {
+      const auto* info = registry.find_bond_law(interaction.bond_law->name);
+      add(*interaction.bond_law, info != nullptr && info->is_effect());
+    }
+  }
+  if (effects.empty()) return "none";
+  std::string joined;
+  for (const std::string& effect : effects) joined += (joined.empty() ? "" : "; ") + effect;
+  return joined;
+}
+
 std::unique_ptr<TrialModel> make_twin_model(ExperimentType experiment,
                                             const model_tests::CommonParams& common,
                                             const TwinSettings& settings) {

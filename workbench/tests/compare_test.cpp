@@ -386,10 +386,10 @@ TEST(History, AppendsReadsBackAndSkipsBrokenLines) {
   data.name = "lab, week 3";  // a comma: the field must be quoted
   SpringModel off(0.1);
   const CompareReport first = compare(data, off);
-  append_history(csv, first, "2026-11-26T05:00:00Z");
+  append_history(csv, first, "2026-11-26T05:00:00Z", "none");
   SpringModel better(0.01);
   const CompareReport second = compare(data, better);
-  append_history(csv, second, "2026-11-26T05:10:00Z");
+  append_history(csv, second, "2026-11-26T05:10:00Z", "bpm_plastic (normal_yield_strength_pa 40)");
   std::ofstream(csv, std::ios::app) << "garbage line\n";
   const std::vector<HistoryEntry> history = read_history(csv);
   ASSERT_EQ(history.size(), 2U);
@@ -400,11 +400,35 @@ TEST(History, AppendsReadsBackAndSkipsBrokenLines) {
   EXPECT_EQ(history[1].score, second.overall("force").score);
   EXPECT_LT(history[1].score, history[0].score);
   EXPECT_EQ(history[1].model, "linear spring");
+  EXPECT_EQ(history[0].effects, "none");
+  EXPECT_EQ(history[1].effects, "bpm_plastic (normal_yield_strength_pa 40)");
   const auto svg = csv.parent_path() / "fl_workbench_history.svg";
   plot_history(history, svg);
   EXPECT_TRUE(std::filesystem::exists(svg));
   std::filesystem::remove(csv);
   std::filesystem::remove(svg);
+}
+
+// A history written before the effects column keeps its runs and becomes one table again:
+// the old lines read with no effects, the new line with its own.
+TEST(History, AnOlderHistoryGainsTheEffectsColumnAndKeepsItsRuns) {
+  const auto csv = std::filesystem::temp_directory_path() / "fl_workbench_history_old.csv";
+  std::ofstream(csv, std::ios::binary | std::ios::trunc)
+      << "run_utc,dataset,channel,rmse_si,score,model\n"
+      << "2026-11-20T08:00:00Z,lab,force,0.5,5,\"DEM twin, bond law bpm\"\n";
+  Dataset data = make_dataset({make_trial("a", spring)});
+  SpringModel model(0.01);
+  append_history(csv, compare(data, model), "2026-12-06T10:00:00Z", "wet_film (lubrication 0.3)");
+  const std::vector<HistoryEntry> history = read_history(csv);
+  ASSERT_EQ(history.size(), 2U);
+  EXPECT_EQ(history[0].model, "DEM twin, bond law bpm");
+  EXPECT_EQ(history[0].effects, "");
+  EXPECT_EQ(history[1].effects, "wet_film (lubrication 0.3)");
+  std::ifstream in(csv);
+  std::string header;
+  std::getline(in, header);
+  EXPECT_EQ(header, "run_utc,dataset,channel,rmse_si,score,model,effects");
+  std::filesystem::remove(csv);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "fl/twin/dem/model.hpp"
 #include "fl/workbench/diagnose.hpp"
 #include "fl/workbench/generator.hpp"
+#include "fl/workbench/twin_models.hpp"
 #include "workbench_test_support.hpp"
 
 namespace fl::workbench {
@@ -143,6 +144,22 @@ TEST(EffectCandidates, ALawRegisteredWithAFitRangeIsACandidateWithNoOtherChange)
     EXPECT_NE(std::string(error.what()).find("'speed_weakening'"), std::string::npos);
   }
   EXPECT_THROW((void)with_bond_effect(base, HiddenEffect{"wet_film", {}}), std::invalid_argument);
+}
+
+// What the run history records beside the error: the effects in the model, each once though
+// both fillet types carry it, with its parameters; the base laws are not effects.
+TEST(EffectCandidates, TheHistoryNamesTheEffectsInTheModelOnce) {
+  const dem::ModelSpec base = test::base_model().base_spec;
+  EXPECT_EQ(model_effects(base), "none");
+  const dem::ModelSpec wet = with_contact_effect(base, {"wet_film", {{"lubrication", 0.3}}});
+  EXPECT_EQ(model_effects(wet), "wet_film (lubrication 0.3)");  // as configured: defaults unsaid
+  const dem::ModelSpec both =
+      with_bond_effect(wet, {"bpm_plastic", {{"normal_yield_strength_pa", 40.0}}});
+  const std::string effects = model_effects(both);
+  EXPECT_NE(effects.find("wet_film ("), std::string::npos) << effects;
+  EXPECT_NE(effects.find("bpm_plastic ("), std::string::npos) << effects;
+  EXPECT_NE(effects.find("normal_yield_strength_pa 40"), std::string::npos) << effects;
+  EXPECT_EQ(effects.find("hertz_mindlin"), std::string::npos) << effects;
 }
 
 }  // namespace

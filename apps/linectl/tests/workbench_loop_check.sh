@@ -44,6 +44,8 @@ assert len(rows) == 2, f"{len(rows)} runs in the history, expected 2"
 before, after = (float(r["rmse_si"]) for r in rows)
 print(f"height RMS {before * 1e3:.3f} mm -> {after * 1e3:.3f} mm")
 assert "bpm_plastic" in rows[1]["model"], rows[1]["model"]
+assert rows[0]["effects"] == "none", rows[0]["effects"]
+assert rows[1]["effects"].startswith("bpm_plastic (") and "normal_yield_strength_pa" in rows[1]["effects"], rows[1]["effects"]
 assert after <= 0.3 * before, "less than a 70 % fall"
 PY
 [ -s "$work/compare/history.svg" ] && [ -s "$work/compare/report.html" ] || fail "report files"

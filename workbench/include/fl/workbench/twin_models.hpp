@@ -203,6 +203,11 @@ class TwinLineTracksModel final : public TrialModel {
 // ensemble cannot jitter the first poses by it. Empty when all three have one.
 std::string_view line_tracks_channel_without_noise(const Dataset& dataset);
 
+// The effects in a model (laws of the effect library, dem::LawInfo::is_effect) with their
+// parameters, "; "-joined in the order the spec lists them, each once; "none" without any:
+// what the run history records beside each run's error.
+std::string model_effects(const dem::ModelSpec& spec);
+
 // What make_twin_model's twins take besides the engine model.
 struct TwinSettings {
   LineTracksSettings line_tracks;
