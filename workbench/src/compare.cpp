@@ -277,8 +277,13 @@ CompareReport compare(const Dataset& dataset, TrialModel& model) {
     }
     TrialTrace trace;
     trace.trial = trial.id;
+    std::optional<std::vector<std::string>> known = model.row_phases(dataset, trial);
     trace.phase =
-        phases_of(dataset.experiment, trial, detail::stated_displacement_noise_m(dataset));
+        known && known->size() == trial.data.rows()
+            ? std::move(*known)
+            : phases_of(dataset.experiment, trial, detail::stated_displacement_noise_m(dataset));
+    // Line tracks: each fillet's own cell, so that the one the model loses stands out.
+    const Channel* fillet = trial.data.find("fillet");
     const Channel* time = trial.data.find("time");
     const Channel* opening = trial.data.find("opening");
     if (time == nullptr) {
@@ -327,6 +332,11 @@ CompareReport compare(const Dataset& dataset, TrialModel& model) {
           add(c.channel, "phase " + trace.phase[k], "", trace.phase[k], m, p, s, noise, t);
           add(c.channel, "trial " + trial.id + ", " + trace.phase[k], trial.id, trace.phase[k], m,
               p, s, noise, t);
+        }
+        if (fillet != nullptr) {
+          add(c.channel,
+              "trial " + trial.id + ", fillet " + detail::significant(fillet->values_si[k], 6),
+              trial.id, "", m, p, s, noise, t);
         }
         for (const std::string& name : varying_conditions) {
           const auto found = trial.conditions.find(name);

@@ -491,6 +491,26 @@ OutputImage line_commands_at(const Table& log, double time_s) {
 
 }  // namespace
 
+std::optional<std::vector<std::string>> TwinLineTracksModel::row_phases(const Dataset& /*dataset*/,
+                                                                        const Trial& trial) const {
+  if (!runs_on_line(trial.conditions)) return std::nullopt;
+  const LineConfig line = settings_.line ? *settings_.line : default_line_config();
+  const double guide_end_mm = line.sections[index(DriveId::kGuide)].end_mm;
+  const double reject_start_mm = line.sections[index(DriveId::kReject)].start_mm;
+  std::vector<std::string> phases;
+  for (const double s_m : trial.data.at("x").values_si) {
+    const double s_mm = s_m * 1e3;
+    if (s_mm >= guide_end_mm && s_mm < reject_start_mm) {
+      phases.emplace_back("on flip plates");
+      continue;
+    }
+    std::string belt(kDriveNames[index(drive_under(line, s_mm))]);
+    if (belt.ends_with("_left")) belt.resize(belt.size() - 5);  // the unit's two belts
+    phases.push_back("on " + belt);
+  }
+  return phases;
+}
+
 std::vector<model_tests::BeltPose> TwinLineTracksModel::run_on_line(
     const Trial& trial, const std::vector<model_tests::BeltPose>& first,
     const std::vector<model_tests::BeltFilletSample>& samples) const {

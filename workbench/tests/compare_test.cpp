@@ -433,3 +433,97 @@ TEST(History, AnOlderHistoryGainsTheEffectsColumnAndKeepsItsRuns) {
 
 }  // namespace
 }  // namespace fl::workbench
+
+#include "fl/workbench/twin_models.hpp"
+
+namespace fl::workbench {
+namespace {
+
+// A line-track model that answers every row as measured but fillet 2's rows on the first
+// multilane unit 30 mm ahead: a model that loses one fillet on one belt.
+class LosesFilletTwoOnMultilane1 final : public TrialModel {
+ public:
+  [[nodiscard]] std::string describe() const override { return "loses fillet 2"; }
+  Table run(const Dataset& /*dataset*/, const Trial& trial) override {
+    Table answer = trial.data;
+    const std::vector<double>& fillet = trial.data.at("fillet").values_si;
+    std::vector<double>& x = answer.channels[2].values_si;
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      if (fillet[k] == 2.0 && phases_[k] == "on multilane1") x[k] += 0.030;
+    }
+    return answer;
+  }
+  [[nodiscard]] std::optional<std::vector<std::string>> row_phases(
+      const Dataset& dataset, const Trial& trial) const override {
+    return twin_.row_phases(dataset, trial);
+  }
+  void set_phases(std::vector<std::string> phases) { phases_ = std::move(phases); }
+
+ private:
+  TwinLineTracksModel twin_{model_tests::CommonParams{}};
+  std::vector<std::string> phases_;
+};
+
+// On the line, where a model fails is a belt and a fillet: the phases are the belts under the
+// rows (the line's geometry, config/line.yaml's default sections) and every fillet has a cell,
+// so the one fillet lost on one unit ranks above its trial.
+TEST(Compare, OnTheLineTheWorstCellsAreTheBeltAndTheFilletWhereTheModelFails) {
+  Trial trial;
+  trial.id = "run1";
+  trial.conditions["machine"] = std::string(kMachineLine);
+  // Two fillets at the same places: 1.5 m (guide), 2.1 m (between guide end 2.0 and reject
+  // start 2.2: the plates), 3.0 m (centring), 3.5 and 3.7 m (multilane 1), 4.0 m (multilane 2).
+  const std::vector<double> places_m{1.5, 2.1, 3.0, 3.5, 3.7, 4.0};
+  std::vector<double> t, id, x, zero;
+  for (const double fillet : {1.0, 2.0}) {
+    for (std::size_t k = 0; k < places_m.size(); ++k) {
+      t.push_back(0.1 * static_cast<double>(k));
+      id.push_back(fillet);
+      x.push_back(places_m[k]);
+      zero.push_back(0.0);
+    }
+  }
+  trial.data = line_tracks_table(t, id, x, zero, zero);
+  Dataset data;
+  data.name = "on the line";
+  data.experiment = ExperimentType::kLineTracks;
+  data.noise_si = {{"x", 0.001}, {"y", 0.001}, {"angle", 0.01}};
+  data.trials = {trial};
+
+  LosesFilletTwoOnMultilane1 model;
+  const std::optional<std::vector<std::string>> phases = model.row_phases(data, trial);
+  ASSERT_TRUE(phases.has_value());
+  const std::vector<std::string> expected{"on guide",      "on flip plates", "on centring",
+                                          "on multilane1", "on multilane1",  "on multilane2"};
+  for (std::size_t k = 0; k < places_m.size(); ++k) {
+    EXPECT_EQ((*phases)[k], expected[k]) << places_m[k] << " m";
+  }
+  model.set_phases(*phases);
+  const CompareReport report = compare(data, model);
+  // Two of fillet 2's six rows are 30 mm off: RMS 30 mm * sqrt(2/6) over the fillet and
+  // 30 mm * sqrt(2/4) over both fillets' four rows on the unit, the worst cell (its phase, and
+  // the trial's rows in it, which are the same rows here).
+  ASSERT_FALSE(report.cells.empty());
+  EXPECT_EQ(report.cells[0].channel, "x");
+  EXPECT_TRUE(report.cells[0].group.ends_with("on multilane1")) << report.cells[0].group;
+  EXPECT_NEAR(report.cells[0].rmse_si, 0.030 * std::sqrt(2.0 / 4.0), 1e-12);
+  const auto find = [&report](const std::string& group) {
+    for (const ErrorCell& c : report.cells) {
+      if (c.channel == "x" && c.group == group) return c.rmse_si;
+    }
+    ADD_FAILURE() << "no cell " << group;
+    return -1.0;
+  };
+  EXPECT_NEAR(find("trial run1, fillet 2"), 0.030 * std::sqrt(2.0 / 6.0), 1e-12);
+  EXPECT_NEAR(find("trial run1, fillet 1"), 0.0, 1e-12);
+  EXPECT_NEAR(find("phase on multilane1"), 0.030 * std::sqrt(2.0 / 4.0), 1e-12);
+  EXPECT_NEAR(find("phase on centring"), 0.0, 1e-12);
+
+  // Tracks on one lab belt keep compare's own phases.
+  Trial on_belt = trial;
+  on_belt.conditions.erase("machine");
+  EXPECT_FALSE(model.row_phases(data, on_belt).has_value());
+}
+
+}  // namespace
+}  // namespace fl::workbench

@@ -29,6 +29,15 @@ class TrialModel {
   [[nodiscard]] virtual std::string describe() const = 0;
   // Throws std::runtime_error when the trial cannot be run (a condition it does not support).
   virtual Table run(const Dataset& dataset, const Trial& trial) = 0;
+  // The phase of each of the trial's rows where the model knows what the data alone cannot
+  // tell (on the line: the belt under the row, from the line's geometry); nullopt: compare
+  // takes phases_of's.
+  [[nodiscard]] virtual std::optional<std::vector<std::string>> row_phases(
+      const Dataset& dataset, const Trial& trial) const {
+    (void)dataset;
+    (void)trial;
+    return std::nullopt;
+  }
 };
 
 // The channels a model is judged on, per experiment (the others drive it).

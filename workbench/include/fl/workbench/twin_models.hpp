@@ -188,6 +188,11 @@ class TwinLineTracksModel final : public TrialModel {
   explicit TwinLineTracksModel(model_tests::CommonParams common, LineTracksSettings settings = {});
   [[nodiscard]] std::string describe() const override;
   Table run(const Dataset& dataset, const Trial& trial) override;
+  // On the line, the belt under each row's measured s ("on centring", "on multilane1" for a
+  // unit's two belts, "on flip plates" between the guide and the reject belt): where on the
+  // line the model fails. Tracks on one belt: compare's own phases.
+  [[nodiscard]] std::optional<std::vector<std::string>> row_phases(
+      const Dataset& dataset, const Trial& trial) const override;
 
  private:
   // One run of a machine: line trial from the given first poses (line coordinates, metres).
