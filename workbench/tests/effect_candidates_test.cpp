@@ -21,6 +21,7 @@ namespace {
 
 std::vector<std::string> laws_of(const std::vector<EffectCandidate>& candidates) {
   std::vector<std::string> laws;
+  laws.reserve(candidates.size());
   for (const EffectCandidate& candidate : candidates) laws.push_back(candidate.law);
   std::sort(laws.begin(), laws.end());
   return laws;
