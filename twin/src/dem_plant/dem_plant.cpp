@@ -127,9 +127,7 @@ std::shared_ptr<const dem::Model> DemPlant::build_model() const {
     if (!(section.end_mm > section.start_mm)) continue;
     const double x0 = section.start_mm * kMm + (id == DriveId::kTakt ? 0.0 : gap);
     const double x1 = section.end_mm * kMm - (id == DriveId::kOutfeed ? 0.0 : gap);
-    if (id == DriveId::kMultilane1Left || id == DriveId::kMultilane2Left) {
-      const DriveId right =
-          id == DriveId::kMultilane1Left ? DriveId::kMultilane1Right : DriveId::kMultilane2Right;
+    if (const DriveId right = carrying_partner(id); right != id) {  // a multilane unit
       self->wall_belt_[d] = spec.meshes.size();
       spec.meshes.push_back(
           belt_rect("belt_left_" + std::to_string(d), equipment, x0, x1, ml_gap, half_w));
