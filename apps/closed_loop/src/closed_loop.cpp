@@ -225,6 +225,7 @@ nlohmann::json to_json(const Kpis& kpis) {
       {"controller",
        {{"scans", c.scans},
         {"takt_strokes", c.takt_strokes},
+        {"takt_strokes_by_travel", c.takt_strokes_by_travel},
         {"reject_reversals", c.reject_reversals},
         {"flip_conflicts", c.flip_conflicts},
         {"frames_processed", c.frames_processed},
@@ -285,7 +286,8 @@ std::string format_kpis(const Kpis& kpis) {
     text.precision(1);
   }
   text << "throughput      " << kpis.placed_per_minute << " placed/min, " << kpis.items_per_minute
-       << " items/min at the takt\n";
+       << " items/min at the takt (" << kpis.counters.takt_strokes_by_travel
+       << " struck by travel)\n";
   text.precision(2);
   text << "in spec         " << 100.0 * kpis.in_spec_share << " % of singulated fillets ("
        << t.outfeed_in_spec << " of " << t.singulated_exits << ")\n";

@@ -117,6 +117,9 @@ void read_stations(YamlMapReader& root, LineConfig& config) {
     c.min_period_s = takt.read_float("min_period_s", Range::positive());
     c.min_gap_mm = takt.read_float("min_gap_mm", Range::positive());
     c.beam_debounce_s = takt.read_float("beam_debounce_s", Range::non_negative());  // 0: none
+    // Absent: off, the rule before the key existed, so that a recording made then replays
+    // the controller it ran.
+    c.rearm_travel_mm = takt.read_float_or("rearm_travel_mm", 0.0F, Range::non_negative());
   }
   {
     YamlMapReader flip = root.map("flip");
@@ -323,6 +326,15 @@ void check_cameras(const LineConfig& config, YamlReader& reader) {
 }
 
 void check_stations(const LineConfig& config, YamlReader& reader) {
+  // Re-arming on travel while the pulled fillet may still break the beam would strike it
+  // twice: the travel must cover a whole fillet, which the nominal length stands for.
+  reader.require(config.takt.rearm_travel_mm == 0.0F ||
+                     config.takt.rearm_travel_mm >= config.tracking.nominal_length_mm,
+                 {"takt.rearm_travel_mm", "tracking.nominal_length_mm"},
+                 named("takt.rearm_travel_mm", config.takt.rearm_travel_mm) +
+                     " must be 0 (off) or at least " +
+                     named("tracking.nominal_length_mm", config.tracking.nominal_length_mm) +
+                     ": before that the pulled fillet may still break the beam");
   reader.require(config.tracking.plates_gate_mm >= config.tracking.match_gate_mm,
                  {"tracking.plates_gate_mm", "tracking.match_gate_mm"},
                  "the gate after the flip plates must be at least the belts' gate");

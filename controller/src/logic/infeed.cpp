@@ -80,6 +80,12 @@ void TaktStation::reset() {
   beam_stable_s_ = 0.0F;
   beam_clear_s_ = 0.0F;
   armed_ = true;
+  armed_by_travel_ = false;
+  travel_rearm_used_ = false;
+  beam_was_broken_ = false;
+  broke_after_pull_ = false;
+  travel_since_stroke_mm_ = 0.0F;
+  travel_since_break_mm_ = 0.0F;
   since_stroke_s_ = 1e9F;
   pulled_mm_ = 0.0F;
 }
@@ -100,13 +106,21 @@ bool TaktStation::gap_clear(const ScanContext& ctx) const {
 void TaktStation::update(const ScanContext& ctx, OutputImage& out) {
   const TaktConfig& takt = config_.takt;
   since_stroke_s_ += ctx.dt_s;
+  const float travel_mm = ctx.tracker.travel_mm(DriveId::kTakt);
+  travel_since_stroke_mm_ += travel_mm;
+  travel_since_break_mm_ += travel_mm;
+  if (ctx.in.takt_beam_broken && !beam_was_broken_) {
+    travel_since_break_mm_ = 0.0F;
+    broke_after_pull_ = phase_ == Phase::kIndex;
+  }
+  beam_was_broken_ = ctx.in.takt_beam_broken;
   beam_stable_s_ = ctx.in.takt_beam_broken ? beam_stable_s_ + ctx.dt_s : 0.0F;
   beam_clear_s_ = ctx.in.takt_beam_broken ? 0.0F : beam_clear_s_ + ctx.dt_s;
   if (!ctx.infeed_enabled) {
     // A stroke in progress finishes, so that the item it created leaves the takt belt
     // instead of waiting on it, tracked, until the next start.
     if (phase_ == Phase::kPull && ctx.running) {
-      pulled_mm_ += ctx.tracker.travel_mm(DriveId::kTakt);
+      pulled_mm_ += travel_mm;
       if (pulled_mm_ < takt.pull_distance_mm) {
         set_drive(out, DriveId::kTakt, config_, takt.takt_speed_mps, true);
         return;
@@ -120,14 +134,25 @@ void TaktStation::update(const ScanContext& ctx, OutputImage& out) {
   const bool beam_clear = beam_clear_s_ >= takt.beam_debounce_s;
 
   if (phase_ == Phase::kPull) {
-    pulled_mm_ += ctx.tracker.travel_mm(DriveId::kTakt);
+    pulled_mm_ += travel_mm;
     if (pulled_mm_ >= takt.pull_distance_mm) phase_ = Phase::kIndex;
   }
-  // Only a clear beam after the pull re-arms: the row held at the barrier can sit a few mm
-  // short of the beam when the stroke starts (a soft fillet settling as the belt stops, a
-  // thin tip under the beam), so the beam may be clear at the start of a pull and then be
-  // broken by the very fillet being pulled; arming on that would take its body for the
-  // next row and create an item for a fillet that is not at the barrier.
+  if (phase_ == Phase::kIndex && beam_clear) {
+    armed_by_travel_ = false;
+    travel_rearm_used_ = false;
+  }
+  if (phase_ == Phase::kIndex && !armed_ && !travel_rearm_used_ && takt.rearm_travel_mm > 0.0F &&
+      travel_since_stroke_mm_ >= takt.rearm_travel_mm) {
+    armed_ = true;
+    armed_by_travel_ = true;
+    travel_rearm_used_ = true;
+  }
+  // Only a clear beam after the pull re-arms (or a whole fillet's travel, above): the row
+  // held at the barrier can sit a few mm short of the beam when the stroke starts (a soft
+  // fillet settling as the belt stops, a thin tip under the beam), so the beam may be clear
+  // at the start of a pull and then be broken by the very fillet being pulled; arming on
+  // that would take its body for the next row and create an item for a fillet that is not
+  // at the barrier.
   if (phase_ == Phase::kIndex && beam_clear) armed_ = true;
   // A row that left the beam while held (settled back, or the previous fillet's tail that
   // the transition belt pulled away) is not at the barrier: creep on at standard speed
@@ -135,17 +160,28 @@ void TaktStation::update(const ScanContext& ctx, OutputImage& out) {
   if (phase_ == Phase::kWaitGap && beam_clear) phase_ = Phase::kIndex;
   if (phase_ == Phase::kIndex && beam && armed_) phase_ = Phase::kWaitGap;
   if (phase_ == Phase::kWaitGap && gap_clear(ctx)) {
-    // The front of the row is at the barrier; its centre half a length behind.
-    Item* item =
-        ctx.tracker.create(ctx.in.time_ns, -0.5F * config_.tracking.nominal_length_mm, false);
+    // The front of the row is at the barrier; its centre half a length behind. A row taken
+    // by travel has its front past the barrier: by the travel since the beam broke again
+    // after the pull, or, touching the pulled fillet, by the travel beyond a nominal fillet.
+    const float nominal_mm = config_.tracking.nominal_length_mm;
+    float front_mm = 0.0F;
+    if (armed_by_travel_ && beam) {
+      front_mm = broke_after_pull_ ? travel_since_break_mm_
+                                   : std::max(0.0F, travel_since_stroke_mm_ - nominal_mm);
+    }
+    Item* item = ctx.tracker.create(ctx.in.time_ns, front_mm - 0.5F * nominal_mm, false);
     ++ctx.counters.takt_strokes;
+    if (armed_by_travel_) ++ctx.counters.takt_strokes_by_travel;
     if (item != nullptr) {
       ++ctx.counters.items_created;
       ctx.events.push(Event{ctx.in.time_ns, EventCode::kItemCreated, item->id, 0, 0.0F});
     }
     phase_ = Phase::kPull;
     armed_ = false;
+    armed_by_travel_ = false;
+    broke_after_pull_ = false;
     pulled_mm_ = 0.0F;
+    travel_since_stroke_mm_ = 0.0F;
     since_stroke_s_ = 0.0F;
   }
 

@@ -72,6 +72,16 @@ class TaktStation {
   // tail keeps the beam broken for a while, and must not count as the next row. Only a
   // clear beam after the pull counts (the pulled fillet may reach the beam during it).
   bool armed_ = true;
+  // A row touching the pulled fillet (or behind a gap shorter than the debounce) never
+  // shows a clear beam: once the belt has moved a whole fillet since the stroke, a broken
+  // beam is taken for it (takt.rearm_travel_mm). Only once before the beam is clear again,
+  // so that a fillet stuck under the beam makes one extra item, not one a period.
+  bool armed_by_travel_ = false;
+  bool travel_rearm_used_ = false;
+  bool beam_was_broken_ = false;
+  bool broke_after_pull_ = false;  // the beam broke again after the pull: the next row's front
+  float travel_since_stroke_mm_ = 0.0F;
+  float travel_since_break_mm_ = 0.0F;
   float since_stroke_s_ = 1e9F;
   float pulled_mm_ = 0.0F;
 };

@@ -149,6 +149,7 @@ std::vector<std::string> compare(const LineConfig& loaded, const LineConfig& exp
   c.exact("takt.min_period_s", t.min_period_s, et.min_period_s);
   c.exact("takt.min_gap_mm", t.min_gap_mm, et.min_gap_mm);
   c.exact("takt.beam_debounce_s", t.beam_debounce_s, et.beam_debounce_s);
+  c.exact("takt.rearm_travel_mm", t.rearm_travel_mm, et.rearm_travel_mm);
 
   c.exact("flip.plate1_s_mm", loaded.flip.plate1_s_mm, expected.flip.plate1_s_mm);
   c.exact("flip.plate2_s_mm", loaded.flip.plate2_s_mm, expected.flip.plate2_s_mm);
@@ -211,9 +212,9 @@ TEST(LineConfigFile, ReferenceFileEqualsDefaultConfig) {
 }
 
 TEST(LineConfigFile, ComparisonCoversEveryField) {
-  // 604 bytes is LineConfig on this ABI as compare() knows it (151 four-byte fields and
+  // 608 bytes is LineConfig on this ABI as compare() knows it (152 four-byte fields and
   // paddings). A new field changes the size: add it to compare(), the loader and line.yaml.
-  EXPECT_EQ(sizeof(LineConfig), 604U);
+  EXPECT_EQ(sizeof(LineConfig), 608U);
   // The comparison must see a change in the last field of the last block.
   LineConfig changed = default_line_config();
   changed.watchdog.stall_fault_cycles += 1;  // any change will do
@@ -407,6 +408,26 @@ TEST(LineConfigErrors, StallLimitOfOnePeriodIsRefused) {
   const std::string text =
       replaced(reference_text(), "  stall_fault_cycles: 10", "  stall_fault_cycles: 1");
   EXPECT_THAT(parse_error(text).what(), HasSubstr("watchdog.stall_fault_cycles"));
+}
+
+// And one from before takt.rearm_travel_mm: only a clear beam re-arms the takt, as then.
+TEST(LineConfigFile, RearmTravelMissingMeansOff) {
+  std::string text = reference_text();
+  const std::string key = "  rearm_travel_mm: 190.0\n";
+  ASSERT_NE(text.find(key), std::string::npos);
+  text.erase(text.find(key), key.size());
+  EXPECT_EQ(parse_line_config(text, "line.yaml").takt.rearm_travel_mm, 0.0F);
+}
+
+TEST(LineConfigErrors, RearmTravelShorterThanAFilletIsRefused) {
+  // 120 mm is past the 110 mm pull but short of the 170 mm nominal fillet: the pulled
+  // fillet's tail could still break the beam and be struck as the next row.
+  const std::string text =
+      replaced(reference_text(), "  rearm_travel_mm: 190.0", "  rearm_travel_mm: 120.0");
+  const ConfigError error = parse_error(text);
+  EXPECT_THAT(error.what(), HasSubstr("takt.rearm_travel_mm = 120 must be 0 (off) or at least "
+                                      "tracking.nominal_length_mm = 170"));
+  EXPECT_EQ(error.problems().size(), 1U);
 }
 
 TEST(LineConfigErrors, PlatesGateNarrowerThanTheBeltsGate) {

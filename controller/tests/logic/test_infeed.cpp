@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <functional>
+
 #include "test_support.hpp"
 
 namespace fl::logic {
@@ -118,13 +120,18 @@ TEST_F(TaktTest, NextRowWaitsUntilThePreviousItemIsClear) {
 }
 
 // The pulled fillet's tail keeps the beam broken after the stroke: that is the same
-// fillet, not the next row, however long it lasts.
-TEST_F(TaktTest, BeamThatNeverClearsCountsOnce) {
+// fillet, not the next row, however long it lasts while the belt has moved less than a
+// whole fillet (takt.rearm_travel_mm, 190 mm).
+TEST_F(TaktTest, BeamThatNeverClearsWithinAFilletsTravelCountsOnce) {
   TaktStation station(h.config);
   h.tracker.advance(h.in);
   h.in.takt_beam_broken = true;
-  for (int i = 0; i < 500; ++i) {  // 5 s, several minimum periods
-    scan(station, 1.0F);
+  for (int i = 0; i < 3; ++i) scan(station, 0.0F);
+  scan(station, h.config.takt.pull_distance_mm);
+  // 5 s, several minimum periods, the fillet held back over the beam while the belt slips
+  // under it: 497 x 0.1 = 49.7 mm more, 159.7 mm since the stroke.
+  for (int i = 0; i < 497; ++i) {
+    scan(station, 0.1F);
     if (!h.tracker.items()[0].active) continue;
     h.tracker.items()[0].s_mm = h.config.takt.min_gap_mm + 1.0F;  // gap is never the limit
   }
@@ -146,10 +153,11 @@ TEST_F(TaktTest, BeamClearAtTheStartOfThePullDoesNotArmTheNextStroke) {
   h.in.takt_beam_broken = false;                    // settled 5 mm back off the beam
   for (int i = 0; i < 4; ++i) scan(station, 5.0F);  // 40 ms clear: twice the debounce
   h.in.takt_beam_broken = true;                     // the pulled fillet reaches the beam
-  // The rest of the pull, then 2 s with its body over the beam (a slow crossing): well past
-  // the minimum period, with the gap never the limit.
-  for (int i = 0; i < 200; ++i) {
-    scan(station, 5.0F);
+  // The rest of the pull (18 x 5 = 90 mm), then 1 s with its body over the beam (a slow
+  // crossing, 100 x 0.3 = 30 mm): 1.22 s, past the minimum period, with the gap never the
+  // limit and 140 mm of travel since the stroke, less than a fillet.
+  for (int i = 0; i < 118; ++i) {
+    scan(station, i < 18 ? 5.0F : 0.3F);
     if (h.tracker.items()[0].active) h.tracker.items()[0].s_mm = h.config.takt.min_gap_mm + 1.0F;
   }
   EXPECT_EQ(h.tracker.active_count(), 1U);
@@ -159,6 +167,101 @@ TEST_F(TaktTest, BeamClearAtTheStartOfThePullDoesNotArmTheNextStroke) {
   h.in.takt_beam_broken = true;
   for (int i = 0; i < 3; ++i) scan(station, 0.0F);
   EXPECT_EQ(h.tracker.active_count(), 2U);
+}
+
+// Seen in the DEM twin (3 of 47 items): the next row touches the pulled fillet, or follows it
+// so closely that the beam is clear for less than the debounce, so the beam never re-arms
+// the takt and the row crosses without a stroke and without an item. Once the belt has
+// moved a whole fillet since the stroke, a broken beam is that row.
+class TaktRearmTest : public TaktTest {
+ protected:
+  // One stroke, its pull, and creeping at standard speed (1.2 mm a scan) with the beam as
+  // `beam_at` says, until the row is struck or `max_scans` pass. Returns the travel since
+  // the stroke when the second item was created (0 if none was).
+  float stroke_then_creep(TaktStation& station, const std::function<bool(int)>& beam_at,
+                          int max_scans) {
+    h.tracker.advance(h.in);
+    h.in.takt_beam_broken = true;
+    for (int i = 0; i < 3; ++i) scan(station, 0.0F);
+    scan(station, h.config.takt.pull_distance_mm);
+    float travel_mm = h.config.takt.pull_distance_mm;
+    for (int i = 0; i < max_scans; ++i) {
+      h.in.takt_beam_broken = beam_at(i);
+      const float step_mm = station.phase() == TaktStation::Phase::kWaitGap ? 0.0F : 1.2F;
+      scan(station, step_mm);
+      travel_mm += step_mm;
+      if (h.tracker.items()[0].active) h.tracker.items()[0].s_mm = h.config.takt.min_gap_mm + 1.0F;
+      if (h.tracker.active_count() == 2U) return travel_mm;
+    }
+    return 0.0F;
+  }
+  const Item& newest() const {
+    const Item* newest = nullptr;
+    for (const Item& item : h.tracker.items()) {
+      if (item.active && (newest == nullptr || item.id > newest->id)) newest = &item;
+    }
+    return *newest;
+  }
+};
+
+TEST_F(TaktRearmTest, TouchingRowIsStruckOnceTheBeltHasMovedAWholeFillet) {
+  TaktStation station(h.config);
+  const float struck_at_mm = stroke_then_creep(
+      station, [](int) { return true; }, 300);
+  ASSERT_GT(struck_at_mm, 0.0F);
+  // Armed at the first scan past 190 mm (110 + 67 x 1.2 = 190.4), the belt then held.
+  EXPECT_NEAR(struck_at_mm, 190.4F, 0.01F);
+  // No break after the pull: the row's front is taken as the travel beyond a nominal
+  // fillet (190.4 - 170), its centre half a nominal length behind that.
+  const float nominal_mm = h.config.tracking.nominal_length_mm;
+  EXPECT_NEAR(newest().s_mm, (struck_at_mm - nominal_mm) - 0.5F * nominal_mm, 0.01F);
+  // Then the row behind it arrives after a clear beam, as usual: a third stroke.
+  for (int i = 0; i < 12; ++i) scan(station, 10.0F);  // its pull
+  h.in.takt_beam_broken = false;
+  for (int i = 0; i < 3; ++i) scan(station, 1.2F);
+  h.in.takt_beam_broken = true;
+  for (int i = 0; i < 100; ++i) {
+    scan(station, 0.0F);
+    for (Item& item : h.tracker.items()) item.s_mm = h.config.takt.min_gap_mm + 1.0F;
+  }
+  EXPECT_EQ(h.tracker.active_count(), 3U);
+}
+
+TEST_F(TaktRearmTest, RowBehindAGapShorterThanTheDebounceIsStruckWithItsFrontWhereItBroke) {
+  TaktStation station(h.config);
+  // The pulled fillet's tail leaves at scan 40 (110 + 40 x 1.2 = 158 mm): one scan clear,
+  // 10 ms, under the 20 ms debounce; the next row breaks the beam at scan 41.
+  const float struck_at_mm = stroke_then_creep(
+      station, [](int i) { return i != 40; }, 300);
+  ASSERT_GT(struck_at_mm, 0.0F);
+  // Its front has moved with the belt since the scan that saw it: the scans after scan 41
+  // up to the arming at 190.4 mm (110 + 67 x 1.2), 25 x 1.2 = 30 mm.
+  const float nominal_mm = h.config.tracking.nominal_length_mm;
+  EXPECT_NEAR(newest().s_mm, 25.0F * 1.2F - 0.5F * nominal_mm, 0.01F);
+}
+
+// A fillet stuck under the beam while the belt runs: one extra item, not one a period.
+TEST_F(TaktRearmTest, BeamBrokenForGoodMakesOneExtraItemAtMost) {
+  TaktStation station(h.config);
+  ASSERT_GT(stroke_then_creep(
+                station, [](int) { return true; }, 300),
+            0.0F);
+  for (int i = 0; i < 1000; ++i) {  // 10 s more, 1.2 m of belt
+    scan(station, station.phase() == TaktStation::Phase::kWaitGap ? 0.0F : 1.2F);
+    for (Item& item : h.tracker.items()) item.s_mm = h.config.takt.min_gap_mm + 1.0F;
+  }
+  EXPECT_EQ(h.tracker.active_count(), 2U);
+}
+
+// With the rule off (a line.yaml from before it) only a clear beam re-arms: 10 s of a
+// broken beam over 1.2 m of belt make no second item.
+TEST_F(TaktRearmTest, WithTheRuleOffOnlyAClearBeamReArms) {
+  h.config.takt.rearm_travel_mm = 0.0F;
+  TaktStation station(h.config);
+  EXPECT_EQ(stroke_then_creep(
+                station, [](int) { return true; }, 1000),
+            0.0F);
+  EXPECT_EQ(h.tracker.active_count(), 1U);
 }
 
 // A row held at the barrier that comes off the beam (settling back, or the beam was broken

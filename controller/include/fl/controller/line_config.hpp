@@ -66,6 +66,11 @@ struct TaktConfig {
   float min_period_s = 0.9F;        // caps the rate: 60 / 0.9 = about 67 per minute
   float min_gap_mm = 200.0F;        // previous item must be this far past the barrier first
   float beam_debounce_s = 0.02F;
+  // Takt belt travel since a stroke began after which the pulled fillet has left the beam
+  // whatever its length (the longest, 176 mm, plus slip): a beam still broken then is the
+  // next row, touching the pulled fillet or behind a gap shorter than the debounce.
+  // 0 switches it off (only a clear beam re-arms).
+  float rearm_travel_mm = 190.0F;
 };
 
 struct FlipConfig {

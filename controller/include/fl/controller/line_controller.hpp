@@ -38,6 +38,9 @@ struct ControllerCounters {
   std::uint64_t items_adopted = 0;  // from detections no tracked item explained
   std::uint64_t items_closed = 0;
   std::uint64_t takt_strokes = 0;
+  // Of those, rows struck without a clear beam since the last stroke (takt.rearm_travel_mm):
+  // rows that touched the previous fillet. Many of them mean the infeed's layer is too dense.
+  std::uint64_t takt_strokes_by_travel = 0;
   std::uint64_t reject_reversals = 0;
   std::uint64_t flip_conflicts = 0;
   std::uint64_t estimates_rejected = 0;  // not finite, out of range, stale, out of order
