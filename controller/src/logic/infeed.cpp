@@ -80,7 +80,6 @@ void TaktStation::reset() {
   beam_stable_s_ = 0.0F;
   beam_clear_s_ = 0.0F;
   armed_ = true;
-  armed_by_travel_ = false;
   travel_rearm_used_ = false;
   beam_was_broken_ = false;
   broke_after_pull_ = false;
@@ -137,14 +136,10 @@ void TaktStation::update(const ScanContext& ctx, OutputImage& out) {
     pulled_mm_ += travel_mm;
     if (pulled_mm_ >= takt.pull_distance_mm) phase_ = Phase::kIndex;
   }
-  if (phase_ == Phase::kIndex && beam_clear) {
-    armed_by_travel_ = false;
-    travel_rearm_used_ = false;
-  }
+  if (phase_ == Phase::kIndex && beam_clear) travel_rearm_used_ = false;
   if (phase_ == Phase::kIndex && !armed_ && !travel_rearm_used_ && takt.rearm_travel_mm > 0.0F &&
       travel_since_stroke_mm_ >= takt.rearm_travel_mm) {
     armed_ = true;
-    armed_by_travel_ = true;
     travel_rearm_used_ = true;
   }
   // Only a clear beam after the pull re-arms (or a whole fillet's travel, above): the row
@@ -165,20 +160,19 @@ void TaktStation::update(const ScanContext& ctx, OutputImage& out) {
     // after the pull, or, touching the pulled fillet, by the travel beyond a nominal fillet.
     const float nominal_mm = config_.tracking.nominal_length_mm;
     float front_mm = 0.0F;
-    if (armed_by_travel_ && beam) {
+    if (armed_by_travel() && beam) {
       front_mm = broke_after_pull_ ? travel_since_break_mm_
                                    : std::max(0.0F, travel_since_stroke_mm_ - nominal_mm);
     }
     Item* item = ctx.tracker.create(ctx.in.time_ns, front_mm - 0.5F * nominal_mm, false);
     ++ctx.counters.takt_strokes;
-    if (armed_by_travel_) ++ctx.counters.takt_strokes_by_travel;
+    if (armed_by_travel()) ++ctx.counters.takt_strokes_by_travel;
     if (item != nullptr) {
       ++ctx.counters.items_created;
       ctx.events.push(Event{ctx.in.time_ns, EventCode::kItemCreated, item->id, 0, 0.0F});
     }
     phase_ = Phase::kPull;
     armed_ = false;
-    armed_by_travel_ = false;
     broke_after_pull_ = false;
     pulled_mm_ = 0.0F;
     travel_since_stroke_mm_ = 0.0F;

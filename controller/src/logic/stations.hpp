@@ -75,8 +75,9 @@ class TaktStation {
   // A row touching the pulled fillet (or behind a gap shorter than the debounce) never
   // shows a clear beam: once the belt has moved a whole fillet since the stroke, a broken
   // beam is taken for it (takt.rearm_travel_mm). Only once before the beam is clear again,
-  // so that a fillet stuck under the beam makes one extra item, not one a period.
-  bool armed_by_travel_ = false;
+  // so that a fillet stuck under the beam makes one extra item, not one a period. Armed
+  // with this still set, the takt was armed by travel: a clear beam resets both.
+  [[nodiscard]] bool armed_by_travel() const { return armed_ && travel_rearm_used_; }
   bool travel_rearm_used_ = false;
   bool beam_was_broken_ = false;
   bool broke_after_pull_ = false;  // the beam broke again after the pull: the next row's front
