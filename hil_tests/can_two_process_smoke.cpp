@@ -26,6 +26,7 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <thread>
@@ -33,6 +34,10 @@
 
 #include "can_smoke_files.hpp"
 #include "candump_peer.hpp"
+#include "cli_support.hpp"
+#include "duration.hpp"
+#include "fl/apps/closed_loop.hpp"
+#include "fl/controller/config_loader.hpp"
 #include "fl/drivers/can_config.hpp"
 #include "process_support.hpp"
 #include "two_process.hpp"
@@ -53,6 +58,19 @@ constexpr const char* kDuration = "20s";
 // The longest a process may run: 20 s of feeding, the drain (the last fillet's way to the
 // outfeed, under 30 s), start-up, and a factor of two for the emulated CPU.
 constexpr auto kRunLimit = std::chrono::seconds(150);
+#ifdef FL_CAN_SOAK
+// Issue 5's ten minutes, some 600 fillets: the in-spec share then moves by 0.17 points per
+// fillet, so its 1-point bound is the comparison's, not one fillet's luck.
+constexpr const char* kSoakDuration = "10m";
+// Both processes keep real time, so the run takes its ten minutes, the drain (under 30 s) and
+// the start-up whatever the emulated CPU's speed; five minutes more before it counts as hung.
+constexpr auto kSoakRunLimit = std::chrono::seconds(900);
+// Issue 5's bound on the KPIs against the lock-step run, in points of the in-spec share; and
+// the throughputs, which two real-time processes reproduce to within a fillet or two a
+// minute (0.4 % over DDS on the host, docs/benchmarks.md), within 2 %.
+constexpr double kInSpecTolerance = 0.01;
+constexpr double kThroughputTolerance = 0.02;
+#endif
 
 // The guest's init brings up vcan0 but not the loopback interface Cyclone's configuration
 // names: up it here (as root in the guest).
@@ -202,33 +220,51 @@ class CanTwoProcess : public ::testing::Test {
   }
 };
 
-TEST_F(CanTwoProcess, ControlAndTwinRunTheLineOverVcan) {
-  const fs::path dir = kWorkDir / "run";
+// What one run of both processes over vcan0 left: exit codes, logs, both JSONs and the
+// frames the independent peer recorded.
+struct VcanRun {  // NOLINT(bugprone-exception-escape): nlohmann::json's implicit members
+  int control_exit = -1;
+  int twin_exit = -1;
+  std::string logs;
+  nlohmann::json control_kpis;
+  nlohmann::json twin_kpis;
+  std::vector<std::string> frames;
+  bool peer = false;
+};
+
+// `control --can vcan0` and `twin serve --plant fast --can vcan0` for `duration` of feeding,
+// seed 1, candump beside them; either is killed when it runs past `limit`.
+VcanRun run_line_over_vcan(const fs::path& dir, const char* duration, std::chrono::seconds limit,
+                           const std::vector<std::string>& environment) {
   fs::create_directories(dir);
   // Only the frames the cross-check counts (SYNC, node 2's heartbeat): recording all of some
   // 3000 a second kept the guest's one emulated CPU so busy on 2026-11-28's slower host that
   // the twin's ticks ran late from the start and the line faulted within a second.
   drivers::test::Candump candump((dir / "candump.log").string(), "vcan0,080:7FF,702:7FF");
-  const bool peer = candump.running();
-
+  VcanRun run;
+  run.peer = candump.running();
   const pid_t twin =
       spawn({self(), "twin", "serve", "--plant", "fast", "--seed", "1", "--can", kInterface,
-             "--duration", kDuration, "--wait", "60s", "--json", (dir / "twin.json").string()},
-            dir / "twin.log", environment());
-  const pid_t control = spawn({self(), "control", "--can", kInterface, "--duration", kDuration,
+             "--duration", duration, "--wait", "60s", "--json", (dir / "twin.json").string()},
+            dir / "twin.log", environment);
+  const pid_t control = spawn({self(), "control", "--can", kInterface, "--duration", duration,
                                "--wait", "60s", "--json", (dir / "control.json").string()},
-                              dir / "control.log", environment());
-  const int control_exit = wait_exit_within(control, kRunLimit);
-  const int twin_exit = wait_exit_within(twin, kRunLimit);
-  const std::vector<std::string> frames = candump.finish();
-  const std::string logs =
-      "--- control\n" + text(dir / "control.log") + "--- twin\n" + text(dir / "twin.log");
-  std::printf("%s", logs.c_str());
-  ASSERT_EQ(control_exit, 0) << logs;
-  ASSERT_EQ(twin_exit, 0) << logs;
+                              dir / "control.log", environment);
+  run.control_exit = wait_exit_within(control, limit);
+  run.twin_exit = wait_exit_within(twin, limit);
+  run.frames = candump.finish();
+  run.logs = "--- control\n" + text(dir / "control.log") + "--- twin\n" + text(dir / "twin.log");
+  if (run.control_exit == 0 && run.twin_exit == 0) {
+    run.control_kpis = load(dir / "control.json");
+    run.twin_kpis = load(dir / "twin.json");
+  }
+  return run;
+}
 
-  const nlohmann::json control_kpis = load(dir / "control.json");
-  const nlohmann::json twin_kpis = load(dir / "twin.json");
+// What every clean run over the bus shows, however long it fed.
+void expect_a_clean_run(const VcanRun& run) {
+  const nlohmann::json& control_kpis = run.control_kpis;
+  const nlohmann::json& twin_kpis = run.twin_kpis;
   // Both books balance, and fillets went all the way through: flipped, centred, placed.
   EXPECT_TRUE(control_kpis["ledger"]["balanced"].get<bool>());
   EXPECT_EQ(control_kpis["ledger"]["records_dropped"].get<int>(), 0);
@@ -269,17 +305,72 @@ TEST_F(CanTwoProcess, ControlAndTwinRunTheLineOverVcan) {
   // emulated guest is no place for a real-time bound (docs/benchmarks.md has the figures).
   EXPECT_GT(wire["estimate_to_sync_us"]["count"].get<int>(), 0);
 
-  if (peer) {
+  if (run.peer) {
     // The independent peer saw every SYNC the master counted (candump ran before the master
     // started and after it ended), and the drives' heartbeats (0x700 + node id).
-    EXPECT_EQ(drivers::test::count_frames(frames, " 080#"), can["syncs_sent"].get<std::size_t>());
-    EXPECT_GE(drivers::test::count_frames(frames, " 702#05"), 1U);
-    std::printf("CAN_SMOKE: candump recorded %zu frames\n", frames.size());
+    EXPECT_EQ(drivers::test::count_frames(run.frames, " 080#"),
+              can["syncs_sent"].get<std::size_t>());
+    EXPECT_GE(drivers::test::count_frames(run.frames, " 702#05"), 1U);
+    std::printf("CAN_SMOKE: candump recorded %zu frames\n", run.frames.size());
   } else {
     std::printf("CAN_SMOKE: candump not in the guest: frames not cross-checked\n");
   }
-  std::printf("CAN_SMOKE: %s\n", control_kpis.dump().c_str());
 }
+
+TEST_F(CanTwoProcess, ControlAndTwinRunTheLineOverVcan) {
+  const VcanRun run = run_line_over_vcan(kWorkDir / "run", kDuration, kRunLimit, environment());
+  std::printf("%s", run.logs.c_str());
+  ASSERT_EQ(run.control_exit, 0) << run.logs;
+  ASSERT_EQ(run.twin_exit, 0) << run.logs;
+  expect_a_clean_run(run);
+  std::printf("CAN_SMOKE: %s\n", run.control_kpis.dump().c_str());
+}
+
+#ifdef FL_CAN_SOAK
+// The last `bytes` of a log: ten minutes of the processes' logs are too long for the console.
+std::string tail_of(const std::string& log, std::size_t bytes) {
+  return log.size() > bytes ? "[...]" + log.substr(log.size() - bytes) : log;
+}
+
+// Issue 5's target over the real kernel CAN stack: the two processes for ten minutes against
+// the fast plant, KPIs within 1 point of the lock-step run with the same seed and the same
+// configuration, computed here in the guest beforehand (under a minute even emulated).
+TEST_F(CanTwoProcess, TenMinutesOverVcanMatchTheLockStepRun) {
+  const LineConfig line = load_line_config(kWorkDir / "config" / "line.yaml");
+  const std::unique_ptr<Plant> plant =
+      apps::make_plant("fast", (kWorkDir / "config" / "plant_fast.yaml").string(), line, "");
+  apps::RunOptions options;
+  options.duration_s = apps::parse_duration_s(kSoakDuration).value();
+  options.seed = 1;
+  const nlohmann::json reference = apps::to_json(apps::run_closed_loop(line, *plant, options));
+  std::printf("CAN_SOAK_LOCK_STEP: %s\n", reference.dump().c_str());
+  std::fflush(stdout);
+
+  const VcanRun run =
+      run_line_over_vcan(kWorkDir / "soak", kSoakDuration, kSoakRunLimit, environment());
+  ASSERT_EQ(run.control_exit, 0) << run.logs;
+  ASSERT_EQ(run.twin_exit, 0) << run.logs;
+  std::printf("%s", tail_of(run.logs, 4096).c_str());
+  std::printf("CAN_SOAK_CONTROL: %s\n", run.control_kpis.dump().c_str());
+  std::printf("CAN_SOAK_TWIN: %s\n", run.twin_kpis.dump().c_str());
+  expect_a_clean_run(run);
+
+  const double in_spec = run.twin_kpis["in_spec_share_of_singulated"].get<double>();
+  const double in_spec_ref = reference["in_spec_share_of_singulated"].get<double>();
+  EXPECT_NEAR(in_spec, in_spec_ref, kInSpecTolerance);
+  const double placed = run.twin_kpis["placed_per_minute"].get<double>();
+  const double placed_ref = reference["placed_per_minute"].get<double>();
+  EXPECT_NEAR(placed, placed_ref, kThroughputTolerance * placed_ref);
+  const double items = run.control_kpis["items_per_minute"].get<double>();
+  const double items_ref = reference["items_per_minute"].get<double>();
+  EXPECT_NEAR(items, items_ref, kThroughputTolerance * items_ref);
+  std::printf(
+      "CAN_SOAK: in spec %.4f (lock step %.4f), placed/min %.2f (%.2f), items/min %.2f "
+      "(%.2f), overruns %d\n",
+      in_spec, in_spec_ref, placed, placed_ref, items, items_ref,
+      run.control_kpis["runtime"]["overruns"].get<int>());
+}
+#endif
 
 // A twin that dies mid-run is every device going silent at once: the master's heartbeat
 // consumer loses each node within its timeout, the line faults and stops, and the ledger
@@ -347,6 +438,10 @@ static int checked_main(int argc, char** argv) {
     return 2;
   }
   ::testing::InitGoogleTest(&argc, argv);
+#ifdef FL_CAN_SOAK
+  // The guest's init runs it without arguments: the soak is this binary's only test.
+  ::testing::GTEST_FLAG(filter) = "CanTwoProcess.TenMinutesOverVcanMatchTheLockStepRun";
+#endif
   return RUN_ALL_TESTS();
 }
 
