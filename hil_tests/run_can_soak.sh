@@ -25,9 +25,11 @@ echo "booting the vcan guest for the ten-minute soak ($(date -u +%H:%M:%S) UTC, 
 status=0
 FL_VCAN_WORK="$build/drivers/vcan_work" TIMEOUT=1200 \
   bash "$root/drivers/tests/run_vcan_tests.sh" "$binary" >"$out/console.log" 2>&1 || status=$?
-grep -a 'CAN_SOAK_LOCK_STEP: ' "$out/console.log" | sed 's/^.*CAN_SOAK_LOCK_STEP: //' >"$out/lock_step.json" || true
-grep -a 'CAN_SOAK_CONTROL: ' "$out/console.log" | sed 's/^.*CAN_SOAK_CONTROL: //' >"$out/control.json" || true
-grep -a 'CAN_SOAK_TWIN: ' "$out/console.log" | sed 's/^.*CAN_SOAK_TWIN: //' >"$out/twin.json" || true
+# The guest prints each JSON on one console line behind its tag.
+for tag_and_file in LOCK_STEP:lock_step CONTROL:control TWIN:twin; do
+  tag="CAN_SOAK_${tag_and_file%%:*}: "
+  sed -n "s/^.*$tag//p" "$out/console.log" >"$out/${tag_and_file#*:}.json"
+done
 {
   grep -a -E 'CAN_SOAK: |CAN_SMOKE: candump|\[  (PASSED|FAILED) |Failure|GUEST: (extra|done)' \
     "$out/console.log" || true
