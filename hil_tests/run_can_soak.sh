@@ -21,7 +21,7 @@ mkdir -p "$out"
 
 # The guest runs for the reference, ten minutes of feeding, the drain and the start-up: the
 # recipe's default cap (300 s) is for the short tests.
-echo "booting the vcan guest for the ten-minute soak ($(date -u +%H:%M:%S) UTC, about 12 min)"
+echo "booting the vcan guest for the ten-minute soak ($(date -u +%H:%M:%S) UTC, about 11 min)"
 status=0
 FL_VCAN_WORK="$build/drivers/vcan_work" TIMEOUT=1200 \
   bash "$root/drivers/tests/run_vcan_tests.sh" "$binary" >"$out/console.log" 2>&1 || status=$?
