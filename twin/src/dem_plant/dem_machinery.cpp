@@ -24,22 +24,44 @@ void DemPlant::step_stations(double h_s, const OutputImage& out) {
   st.plate1_travel = approach(st.plate1_travel, out.flip_plate1_flip ? 1.0 : 0.0, plate_rate);
   st.plate2_travel = approach(st.plate2_travel, out.flip_plate2_flip ? 1.0 : 0.0, plate_rate);
 
+  if (config_.machinery.centring_unit == DemCentringUnit::kJaws) {
+    step_jaws(h_s, out);
+  } else {
+    step_pusher(h_s, out);
+  }
+
+  const double roller_rate = h_s / std::max(static_cast<double>(line_.squeeze.actuation_s), 1e-6);
+  st.roller_travel = approach(st.roller_travel, out.squeeze_roller_down ? 1.0 : 0.0, roller_rate);
+  const bool was_pressing = st.roller_pressing;
+  st.roller_pressing =
+      st.roller_travel >= static_cast<double>(config_.shared.squeeze.contact_fraction);
+  st.roller_went_down = st.roller_pressing && !was_pressing;
+  st.knife_blowing = out.final_reject;  // solenoid and air: immediate against the 10 ms scan
+}
+
+const DemPlant::Fillet* DemPlant::fillet_at_centring() const {
+  const double cs_m = line_.centring.s_mm * kMm;
+  const double window_m = config_.machinery.pusher_window_half_mm * kMm;
+  const Fillet* nearest = nullptr;
+  for (const Fillet& f : fillets_) {
+    const double from_m = std::abs(f.centroid_m.x() - cs_m);
+    if (from_m <= window_m &&
+        (nearest == nullptr || from_m < std::abs(nearest->centroid_m.x() - cs_m))) {
+      nearest = &f;
+    }
+  }
+  return nearest;
+}
+
+void DemPlant::step_pusher(double h_s, const OutputImage& out) {
+  Stations& st = stations_;
   // Centring pusher: a stroke engages at the edge of the fillet at the unit and travels the
   // commanded shift; it parks when the stroke ends and the pusher is back.
   const double max_shift_mm = line_.centring.max_shift_mm;
   const double shift_mm =
       std::clamp(static_cast<double>(out.centring_shift_mm), -max_shift_mm, max_shift_mm);
   if (out.centring_stroke && st.pusher_side == 0 && std::abs(shift_mm) > 0.0) {
-    const double cs_m = line_.centring.s_mm * kMm;
-    const double window_m = config_.machinery.pusher_window_half_mm * kMm;
-    const Fillet* nearest = nullptr;
-    for (const Fillet& f : fillets_) {
-      const double from_m = std::abs(f.centroid_m.x() - cs_m);
-      if (from_m <= window_m &&
-          (nearest == nullptr || from_m < std::abs(nearest->centroid_m.x() - cs_m))) {
-        nearest = &f;
-      }
-    }
+    const Fillet* nearest = fillet_at_centring();
     if (nearest != nullptr) {
       st.pusher_side = shift_mm < 0.0 ? 1 : -1;
       st.pusher_edge_m = st.pusher_side > 0 ? nearest->upper_m.y() : nearest->lower_m.y();
@@ -66,14 +88,49 @@ void DemPlant::step_stations(double h_s, const OutputImage& out) {
     st.pusher_mm += step_mm;
   }
   if (!out.centring_stroke && st.pusher_mm == 0.0) st.pusher_side = 0;
+}
 
-  const double roller_rate = h_s / std::max(static_cast<double>(line_.squeeze.actuation_s), 1e-6);
-  st.roller_travel = approach(st.roller_travel, out.squeeze_roller_down ? 1.0 : 0.0, roller_rate);
-  const bool was_pressing = st.roller_pressing;
-  st.roller_pressing =
-      st.roller_travel >= static_cast<double>(config_.shared.squeeze.contact_fraction);
-  st.roller_went_down = st.roller_pressing && !was_pressing;
-  st.knife_blowing = out.final_reject;  // solenoid and air: immediate against the 10 ms scan
+void DemPlant::step_jaws(double h_s, const OutputImage& out) {
+  Stations& st = stations_;
+  const DemMachineryConfig& m = config_.machinery;
+  using Jaws = Stations::Jaws;
+  if (!out.centring_stroke) {
+    st.jaws = Jaws::kParked;
+    st.jaw_speed_mps = 0.0;
+    st.pusher_mm = 0.0;
+    return;
+  }
+  if (st.jaws == Jaws::kParked) {
+    const Fillet* nearest = fillet_at_centring();
+    if (nearest == nullptr) return;
+    // Both jaws start just outside the fillet's outermost side: the nearer jaw meets it at
+    // once, the other closes the same way from the far side.
+    constexpr double kStartClearanceM = 0.003;
+    st.jaw_half_gap_m =
+        std::max(std::abs(nearest->upper_m.y()), std::abs(nearest->lower_m.y())) + kStartClearanceM;
+    st.jaw_speed_mps = 0.0;
+    st.jaws = Jaws::kClosing;
+  }
+  if (st.jaws == Jaws::kClosing) {
+    const dem::State& s = sim_->state();
+    const double grip_n = m.jaw_grip_force_n;
+    if (std::abs(s.wall_force_n[wall_pusher_].y()) >= grip_n &&
+        std::abs(s.wall_force_n[wall_jaw_].y()) >= grip_n) {
+      st.jaws = Jaws::kGripping;
+      st.jaw_speed_mps = 0.0;
+    } else {
+      // The pusher's speed and acceleration (line.yaml's stroke time, pusher_accel_mps2).
+      const double top_mps = line_.centring.max_shift_mm * kMm /
+                             std::max(static_cast<double>(line_.centring.stroke_time_s), 1e-6);
+      const double accel_mps2 = std::max(static_cast<double>(m.pusher_accel_mps2), 1e-3);
+      st.jaw_speed_mps = approach(st.jaw_speed_mps, top_mps, accel_mps2 * h_s);
+      st.jaw_half_gap_m = std::max(st.jaw_half_gap_m - st.jaw_speed_mps * h_s,
+                                   static_cast<double>(m.jaw_min_half_gap_mm) * kMm);
+    }
+  }
+  // The controller holds the stroke until the unit reports the commanded shift: a gripping
+  // unit has centred the fillet, which is what the shift asked for.
+  st.pusher_mm = st.jaws == Jaws::kGripping ? static_cast<double>(out.centring_shift_mm) : 0.0;
 }
 
 void DemPlant::command_walls(double h_s) {
@@ -110,6 +167,7 @@ void DemPlant::command_walls(double h_s) {
   // by 0.77 rad during one stroke and threw its centroid 30 mm past the centre line.
   s.walls[wall_pusher_].surface_velocity_m_per_s =
       Vec3(drives_.speed_mps(DriveId::kCentring), 0.0, 0.0);
+  s.walls[wall_jaw_].surface_velocity_m_per_s = s.walls[wall_pusher_].surface_velocity_m_per_s;
 
   bool teleported = false;
   // Kinematic walls: the velocity that lands on the target at the control step's end.
@@ -126,8 +184,14 @@ void DemPlant::command_walls(double h_s) {
   const DemMachineryConfig& m = config_.machinery;
   const Stations& st = stations_;
   const double park_m = m.belt_half_width_mm * kMm + 0.15;
-  const double pusher_y_m = st.pusher_side == 0 ? park_m : st.pusher_edge_m + st.pusher_mm * kMm;
-  drive_wall(s.walls[wall_pusher_], Vec3(0.0, pusher_y_m, 0.0));
+  if (m.centring_unit == DemCentringUnit::kJaws) {
+    const double half_gap_m = st.jaws == Stations::Jaws::kParked ? park_m : st.jaw_half_gap_m;
+    drive_wall(s.walls[wall_pusher_], Vec3(0.0, half_gap_m, 0.0));
+    drive_wall(s.walls[wall_jaw_], Vec3(0.0, -half_gap_m, 0.0));
+  } else {
+    const double pusher_y_m = st.pusher_side == 0 ? park_m : st.pusher_edge_m + st.pusher_mm * kMm;
+    drive_wall(s.walls[wall_pusher_], Vec3(0.0, pusher_y_m, 0.0));
+  }
   const double drop_m = (m.roller_up_gap_mm - m.roller_down_gap_mm) * kMm;
   dem::WallState& roller = s.walls[wall_roller_];
   drive_wall(roller, Vec3(0.0, 0.0, -drop_m * st.roller_travel));

@@ -178,15 +178,22 @@ std::shared_ptr<const dem::Model> DemPlant::build_model() const {
     }
     spec.meshes.push_back(std::move(rails));
   }
-  // Centring pusher: a plate in the x-z plane at y = 0, moved sideways by its wall state.
+  // Centring pusher (or the first of the two jaws): a plate in the x-z plane at y = 0, moved
+  // sideways by its wall state.
   {
     dem::MeshWallSpec pusher{"centring_pusher", equipment, {}};
     const double cs = line_.centring.s_mm * kMm;
-    const double half_len = m.pusher_half_length_mm * kMm;
+    const double half_len = (m.centring_unit == DemCentringUnit::kJaws ? m.jaw_half_length_mm
+                                                                       : m.pusher_half_length_mm) *
+                            kMm;
     add_fence(pusher, cs - half_len, 0.0, cs + half_len, 0.0, 0.002,
               0.002 + m.pusher_height_mm * kMm);
+    dem::MeshWallSpec jaw{"centring_jaw", equipment, pusher.triangles};
     self->wall_pusher_ = spec.meshes.size();
     spec.meshes.push_back(std::move(pusher));
+    // The second jaw, parked unless the unit is built as jaws (the pusher is the first).
+    self->wall_jaw_ = spec.meshes.size();
+    spec.meshes.push_back(std::move(jaw));
   }
   // Squeeze roller: the lateral surface of a cylinder across the belt (axis along y).
   {
@@ -274,6 +281,7 @@ void DemPlant::reset(std::uint64_t seed, InputImage& in) {
   const DemMachineryConfig& m = config_.machinery;
   // Pusher parked outside the side wall; roller pivots about its own axis.
   state.walls[wall_pusher_].translation_m = Vec3(0.0, m.belt_half_width_mm * kMm + 0.15, 0.0);
+  state.walls[wall_jaw_].translation_m = Vec3(0.0, -(m.belt_half_width_mm * kMm + 0.15), 0.0);
   state.walls[wall_roller_].pivot_m =
       Vec3(line_.squeeze.roller_s_mm * kMm, 0.0, (m.roller_up_gap_mm + m.roller_radius_mm) * kMm);
   state.walls[wall_plate1_].pivot_m = plate_layout().hinge_m;

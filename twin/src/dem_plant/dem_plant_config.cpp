@@ -17,6 +17,11 @@ constexpr std::array<EnumName<DemInfeedSource>, 2> kInfeedSources{{
     {"dem_bulk_end", DemInfeedSource::kDemBulkEnd},
 }};
 
+constexpr std::array<EnumName<DemCentringUnit>, 2> kCentringUnits{{
+    {"pusher", DemCentringUnit::kPusher},
+    {"jaws", DemCentringUnit::kJaws},
+}};
+
 ConfigProblem inconsistent(const std::filesystem::path& file, std::string key_path,
                            std::string detail) {
   ConfigProblem problem;
@@ -129,6 +134,10 @@ DemPlantConfig load_dem_plant_config(const std::filesystem::path& file) {
       m.pusher_height_mm = map.read_float("pusher_height_mm", Range::positive());
       m.pusher_window_half_mm = map.read_float("pusher_window_half_mm", Range::positive());
       m.pusher_accel_mps2 = map.read_float("pusher_accel_mps2", Range::positive());
+      m.centring_unit = map.read_enum("centring_unit", kCentringUnits);
+      m.jaw_grip_force_n = map.read_float("jaw_grip_force_n", Range::positive());
+      m.jaw_min_half_gap_mm = map.read_float("jaw_min_half_gap_mm", Range::positive());
+      m.jaw_half_length_mm = map.read_float("jaw_half_length_mm", Range::positive());
       m.roller_radius_mm = map.read_float("roller_radius_mm", Range::positive());
       m.roller_up_gap_mm = map.read_float("roller_up_gap_mm", Range::positive());
       m.roller_down_gap_mm = map.read_float("roller_down_gap_mm", Range::non_negative());

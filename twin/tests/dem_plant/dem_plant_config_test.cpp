@@ -67,6 +67,13 @@ TEST(DemPlantConfigFile, UnknownInfeedSourceIsNamedWithTheChoices) {
   EXPECT_NE(error.find("dem_bulk_end"), std::string::npos) << error;
 }
 
+TEST(DemPlantConfigFile, UnknownCentringUnitIsNamedWithTheChoices) {
+  const std::string error =
+      load_error(variant_file("centring", "  centring_unit: pusher", "  centring_unit: funnel"));
+  EXPECT_NE(error.find("machinery.centring_unit"), std::string::npos) << error;
+  EXPECT_NE(error.find("jaws"), std::string::npos) << error;
+}
+
 TEST(DemPlantConfigFile, LevelSensorBehindTheLevellersBladesIsRefused) {
   // bulk_line.yaml's rotor reaches back to 500 - 150 = 350 mm.
   const std::string error = load_error(

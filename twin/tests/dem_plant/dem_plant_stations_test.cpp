@@ -17,9 +17,9 @@ namespace {
 // face (mu 0.5) also braked the side it touched: the fillet turned 0.77 rad and its centroid
 // ended 31 mm past the centre line even with a gentle profile.
 // Lateral position of a fillet fed at +offset through one centring stroke of -offset, driven
-// as the controller does: stroke within +-20 mm of the unit, held until the pusher reports
+// as the controller does: stroke within +-20 mm of the unit, held until the unit reports
 // the shift or the item is 150 mm past the unit.
-double centred_y_mm(const DemPlantConfig& config) {
+double centred_y_mm(const DemPlantConfig& config, double angle_rad = 0.0) {
   DemRig rig(config);
   rig.run(0.2);                       // belts at speed
   constexpr double kOffsetMm = 45.0;  // a typical camera 2 offset in the closed loop (40..53)
@@ -27,6 +27,7 @@ double centred_y_mm(const DemPlantConfig& config) {
   spawn.s_mm = 3000.0;  // on the centring belt, 200 mm before the unit at 3200
   spawn.y_mm = kOffsetMm;
   spawn.v_mps = 0.5;
+  spawn.angle_rad = angle_rad;
   EXPECT_TRUE(rig.plant->spawn_fillet(spawn));
   const double unit_mm = rig.line.centring.s_mm;
   constexpr double kWindowMm = 20.0;  // the controller's stroke window around the unit
@@ -55,6 +56,20 @@ TEST(DemPlantStations, CentringStrokePutsTheFilletOnTheCentreLine) {
   DemPlantConfig abrupt = test_config();
   abrupt.machinery.pusher_accel_mps2 = 1000.0F;
   EXPECT_LT(centred_y_mm(abrupt), -7.0);
+}
+
+// The jaws centre the fillet's outline wherever they touch it. A fillet at 45 degrees is what
+// the pusher handles worst: met at its corner, the centroid moves 0.64 to 0.76 of the shift in
+// the closed loop (docs/twin.md, "Where the DEM closed loop loses fillets").
+TEST(DemPlantStations, JawsCentreAnAngledFilletWhereThePusherLeavesItOff) {
+  constexpr double kAngledRad = 0.785;  // 45 degrees off the travel
+  DemPlantConfig jaws = test_config();
+  jaws.machinery.centring_unit = DemCentringUnit::kJaws;
+  // Half the final camera's 20 mm lateral tolerance. The jaws centre the outline; the
+  // centroid of an angled fillet, thick at one end, lies a few mm off it (6 mm measured).
+  EXPECT_NEAR(centred_y_mm(jaws, kAngledRad), 0.0, 10.0);
+  // The pusher's defect, kept visible: fed 45 mm off, it stays beyond that bound (25 mm).
+  EXPECT_GT(centred_y_mm(test_config(), kAngledRad), 10.0);
 }
 
 }  // namespace

@@ -32,6 +32,9 @@
 //   trapezoidal profile whose braking stays under the friction that stops the fillet on the
 //   belt (else the plate stops and the fillet slides on). Its face runs with the centring
 //   belt (a belt-faced pusher), so it shifts without braking one side and turning the fillet.
+//   Or, with machinery.centring_unit: jaws, two such plates closing on the centre line from
+//   the fillet's outer side until both press it with the grip force; the unit then reports
+//   the commanded shift as done.
 // - Squeeze roller: a cylinder mesh lowered onto the squeeze belt, rolling with it.
 // - Air knife: a removal zone around its position while it blows.
 // - Feeder, one of two (DemFeederConfig::source):
@@ -198,6 +201,12 @@ class DemPlant final : public Plant {
     double pusher_speed_mmps = 0.0;
     int pusher_side = 0;  // +1 pushes from the left (towards -y), -1 from the right, 0 parked
     double pusher_edge_m = 0.0;  // fillet edge where the stroke began
+    // Jaws (DemCentringUnit::kJaws): each plate this far from the centre line while closed on
+    // a fillet; parked outside the side walls otherwise.
+    enum class Jaws : std::uint8_t { kParked, kClosing, kGripping };
+    Jaws jaws = Jaws::kParked;
+    double jaw_half_gap_m = 0.0;
+    double jaw_speed_mps = 0.0;
     double roller_travel = 0.0;
     bool roller_pressing = false;
     bool roller_went_down = false;
@@ -255,6 +264,10 @@ class DemPlant final : public Plant {
 
   // dem_machinery.cpp
   void step_stations(double h_s, const OutputImage& out);
+  void step_pusher(double h_s, const OutputImage& out);
+  void step_jaws(double h_s, const OutputImage& out);
+  // The fillet a centring stroke acts on: the nearest within the window around the unit.
+  [[nodiscard]] const Fillet* fillet_at_centring() const;
   void command_walls(double h_s);
   void apply_events(const OutputImage& out);
   void flip_sideways(Fillet& fillet);
@@ -289,8 +302,8 @@ class DemPlant final : public Plant {
   std::shared_ptr<const dem::Model> model_;
   std::unique_ptr<dem::Simulation> sim_;
   std::vector<std::size_t> wall_belt_;  // per drive: engine wall index of its belt, or npos
-  std::size_t wall_plate1_ = 0, wall_landing_ = 0, wall_pusher_ = 0, wall_roller_ = 0,
-              wall_right_ml1_ = 0, wall_right_ml2_ = 0;
+  std::size_t wall_plate1_ = 0, wall_landing_ = 0, wall_pusher_ = 0, wall_jaw_ = 0,
+              wall_roller_ = 0, wall_right_ml1_ = 0, wall_right_ml2_ = 0;
 
   DemPlantFaults faults_{};
   DemPlantCounters counters_{};

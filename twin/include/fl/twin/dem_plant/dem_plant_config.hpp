@@ -41,6 +41,17 @@ struct DemSimulationConfig {
   bool operator==(const DemSimulationConfig&) const = default;
 };
 
+// What centres a fillet at line.yaml's centring station.
+enum class DemCentringUnit : std::uint8_t {
+  // One belt-faced plate meets the fillet's outermost point and travels the commanded shift.
+  // An angled fillet is met at its corner and partly turns instead of moving (docs/twin.md).
+  kPusher,
+  // Two belt-faced plates close on the fillet from both sides, coupled so that they meet on
+  // the belt's centre line, until both press it with grip_force_n (a force-limited gripper).
+  // Where they stop does not depend on where they touch: the fillet's outline ends centred.
+  kJaws,
+};
+
 struct DemMachineryConfig {
   float belt_half_width_mm = 200.0F;  // 400 mm belts, the fast plant's
   // Gaps between consecutive belts and between the two belts of a multilane unit: coplanar
@@ -60,6 +71,17 @@ struct DemMachineryConfig {
   // mu g of the fillet on the belt (0.5 x 9.81 = 4.9 m/s^2, config/dem.yaml), so that the
   // fillet stops with the plate instead of sliding on: the real unit's servo profile.
   float pusher_accel_mps2 = 4.0F;
+  DemCentringUnit centring_unit = DemCentringUnit::kPusher;
+  // Jaws: each presses the fillet at least this hard before they stop closing; over the
+  // fillet's sliding friction on the belt (mu m g, 0.5 x 0.3 kg x 9.81 = 1.5 N), which the one
+  // jaw that pushes alone feels, so only a fillet held from both sides stops them.
+  float jaw_grip_force_n = 5.0F;
+  // Jaws close at most to this half gap (nothing between them).
+  float jaw_min_half_gap_mm = 15.0F;
+  // The jaws' length along the travel (half). Closing from a fillet's outer side takes up to
+  // 0.2 s, in which the fillet runs 100 mm at 0.5 m/s: jaws as short as the pusher let it
+  // leave before they met.
+  float jaw_half_length_mm = 200.0F;
   // Squeeze roller: a cylinder across the belt; bottom this high above the belt when up / down.
   float roller_radius_mm = 40.0F;
   float roller_up_gap_mm = 80.0F;
