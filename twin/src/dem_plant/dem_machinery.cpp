@@ -16,6 +16,16 @@ constexpr double kMm = 1e-3;
 // A wall jump larger than this is placed directly instead of moved (park <-> stroke start).
 constexpr double kTeleportM = 0.005;
 
+// The centring plates (pusher or jaws) move at most a full stroke in line.yaml's stroke time,
+// and accelerate and brake at DemMachineryConfig::pusher_accel_mps2.
+double centring_top_speed_mmps(const LineConfig& line) {
+  return line.centring.max_shift_mm /
+         std::max(static_cast<double>(line.centring.stroke_time_s), 1e-6);
+}
+double centring_accel_mmps2(const DemMachineryConfig& machinery) {
+  return std::max(static_cast<double>(machinery.pusher_accel_mps2), 1e-3) * 1000.0;
+}
+
 }  // namespace
 
 void DemPlant::step_stations(double h_s, const OutputImage& out) {
@@ -68,13 +78,11 @@ void DemPlant::step_pusher(double h_s, const OutputImage& out) {
     }
   }
   const double pusher_target_mm = out.centring_stroke && st.pusher_side != 0 ? shift_mm : 0.0;
-  const double pusher_speed_mmps =
-      max_shift_mm / std::max(static_cast<double>(line_.centring.stroke_time_s), 1e-6);
+  const double pusher_speed_mmps = centring_top_speed_mmps(line_);
   // Trapezoidal profile: top speed from the stroke time, acceleration and braking limited
   // (DemMachineryConfig::pusher_accel_mps2). A plate that stops dead from full speed throws
   // the fillet on by v^2 / (2 mu g), 25 mm at 0.5 m/s and mu 0.5.
-  const double accel_mmps2 =
-      std::max(static_cast<double>(config_.machinery.pusher_accel_mps2), 1e-3) * 1000.0;
+  const double accel_mmps2 = centring_accel_mmps2(config_.machinery);
   const double to_go_mm = pusher_target_mm - st.pusher_mm;
   const double wanted_mmps = std::copysign(
       std::min(pusher_speed_mmps, std::sqrt(2.0 * accel_mmps2 * std::abs(to_go_mm))), to_go_mm);
@@ -119,11 +127,8 @@ void DemPlant::step_jaws(double h_s, const OutputImage& out) {
       st.jaws = Jaws::kGripping;
       st.jaw_speed_mps = 0.0;
     } else {
-      // The pusher's speed and acceleration (line.yaml's stroke time, pusher_accel_mps2).
-      const double top_mps = line_.centring.max_shift_mm * kMm /
-                             std::max(static_cast<double>(line_.centring.stroke_time_s), 1e-6);
-      const double accel_mps2 = std::max(static_cast<double>(m.pusher_accel_mps2), 1e-3);
-      st.jaw_speed_mps = approach(st.jaw_speed_mps, top_mps, accel_mps2 * h_s);
+      st.jaw_speed_mps = approach(st.jaw_speed_mps, centring_top_speed_mmps(line_) * kMm,
+                                  centring_accel_mmps2(m) * kMm * h_s);
       st.jaw_half_gap_m = std::max(st.jaw_half_gap_m - st.jaw_speed_mps * h_s,
                                    static_cast<double>(m.jaw_min_half_gap_mm) * kMm);
     }
