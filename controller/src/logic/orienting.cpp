@@ -194,27 +194,43 @@ void CentringStation::update(const ScanContext& ctx, OutputImage& out) {
   // more when it brakes gently enough not to throw the fillet, longer than the item takes
   // through the window (40 mm, 80 ms at 0.5 m/s, against 0.12 s for a full stroke).
   constexpr float kStrokeHoldMm = 150.0F;
-  // The pusher is at the commanded shift within this (its positioning, and float rounding).
+  // The pusher is at the commanded shift, or home, within this (its positioning, and float
+  // rounding).
   constexpr float kPusherArrivedMm = 1.0F;
   out.centring_stroke = false;
   out.centring_shift_mm = 0.0F;
-  bool holding = false;  // a stroke in progress wins over pre-positioning for the next item
+  // A stroke in progress wins over pre-positioning and over the next item's stroke.
+  bool holding = false;
   float held_shift_mm = 0.0F;
   for (Item& item : ctx.tracker.items()) {
     if (!item.active || item.centring_done) continue;
-    if (item.s_mm < centring.s_mm - kApproachMm) continue;
-    if (item.s_mm > centring.s_mm + kStrokeWindowMm) {
-      const bool arrived =
-          std::fabs(ctx.in.centring_position_mm - item.centring_shift_mm) < kPusherArrivedMm;
-      if (item.centring_shift_mm != 0.0F && !arrived && item.s_mm < centring.s_mm + kStrokeHoldMm) {
-        holding = true;
-        held_shift_mm = item.centring_shift_mm;
-        continue;
-      }
-      item.centring_done = true;
-      item.y_mm += item.centring_shift_mm;
+    if (item.s_mm <= centring.s_mm + kStrokeWindowMm) continue;
+    const bool arrived =
+        std::fabs(ctx.in.centring_position_mm - item.centring_shift_mm) < kPusherArrivedMm;
+    if (item.centring_stroke_started && !arrived && item.s_mm < centring.s_mm + kStrokeHoldMm) {
+      holding = true;
+      held_shift_mm = item.centring_shift_mm;
       continue;
     }
+    item.centring_done = true;
+    // An item whose stroke never began (the pusher was still out for the one before) is
+    // where the camera saw it.
+    if (item.centring_stroke_started) item.y_mm += item.centring_shift_mm;
+  }
+  if (holding) {
+    out.centring_shift_mm = held_shift_mm;
+    out.centring_stroke = true;
+    return;
+  }
+  // A new stroke starts only from home. The plate is wherever the last stroke left it: a
+  // stroke commanded while it was still retracting pushed from the last fillet's side, and
+  // a plate retracting through the new shift read as arrived (the DEM twin: 6 of 331 items
+  // in six 60 s runs). The pusher retracts as soon as no stroke is commanded.
+  const bool pusher_home = std::fabs(ctx.in.centring_position_mm) < kPusherArrivedMm;
+  for (Item& item : ctx.tracker.items()) {
+    if (!item.active || item.centring_done) continue;
+    if (item.s_mm < centring.s_mm - kApproachMm) continue;
+    if (item.s_mm > centring.s_mm + kStrokeWindowMm) continue;
     const CameraEvidence& evidence = item.evidence[index(CameraId::kPosition)];
     if (evidence.frames == 0) continue;  // not measured: leave it where it is
     item.y_mm = evidence.mean_y_mm();
@@ -222,11 +238,11 @@ void CentringStation::update(const ScanContext& ctx, OutputImage& out) {
     if (std::fabs(shift_mm) < centring.deadband_mm) shift_mm = 0.0F;
     item.centring_shift_mm = shift_mm;
     out.centring_shift_mm = shift_mm;
-    out.centring_stroke = shift_mm != 0.0F && item.s_mm >= centring.s_mm - kStrokeWindowMm;
-  }
-  if (holding) {
-    out.centring_shift_mm = held_shift_mm;
-    out.centring_stroke = true;
+    const bool at_unit = item.s_mm >= centring.s_mm - kStrokeWindowMm;
+    if (shift_mm != 0.0F && at_unit && (item.centring_stroke_started || pusher_home)) {
+      item.centring_stroke_started = true;
+      out.centring_stroke = true;
+    }
   }
 }
 

@@ -74,6 +74,7 @@ struct Item {
   float drop_travel_mm = 0.0F;
   bool centring_done = false;
   float centring_shift_mm = 0.0F;
+  bool centring_stroke_started = false;  // the pusher left home for this item
   std::int8_t multilane_unit = -1;
   bool orienting_done = false;
   float target_angle_rad = 0.0F;

@@ -234,5 +234,54 @@ TEST(Centring, HeldStrokeEndsWhenTheItemIsWellPastTheUnit) {
   EXPECT_TRUE(item->centring_done);
 }
 
+// Two items close together: the first one's stroke ends as it leaves the window, and the
+// pusher retracts from its 50 mm. The second item's stroke waits until the pusher reports
+// home; passing 20 mm on the way back (the second item's shift) is not its stroke done. A
+// second item that leaves the window before the pusher is home keeps the camera's offset.
+TEST(Centring, NextStrokeStartsOnlyWithThePusherHome) {
+  test::Harness h;
+  CentringStation station(h.config);
+  const float unit_mm = h.config.centring.s_mm;
+  auto measured = [&](Item* item, float y_mm) {
+    FilletEstimate estimate = test::good_estimate(Hand::kLeft, SideUp::kBone, 0.0F);
+    estimate.y_mm = y_mm;
+    item->evidence[index(CameraId::kPosition)].add(estimate);
+  };
+  Item* first = h.tracker.create(0, unit_mm + 21.0F, false);
+  first->y_mm = 50.0F;  // as camera 2 saw it when its stroke began
+  first->centring_shift_mm = -50.0F;
+  first->centring_stroke_started = true;
+  Item* second = h.tracker.create(0, unit_mm - 10.0F, false);  // in the window
+  measured(second, 20.0F);
+  h.in.centring_position_mm = -50.0F;  // the first stroke is done
+  station.update(h.context(), h.out);
+  EXPECT_TRUE(first->centring_done);
+  EXPECT_FLOAT_EQ(first->y_mm, 0.0F);
+  EXPECT_FALSE(h.out.centring_stroke) << "the pusher is out at -50 mm";
+  EXPECT_FLOAT_EQ(h.out.centring_shift_mm, -20.0F);  // pre-positioned only
+  h.in.centring_position_mm = -20.0F;                // retracting through the second item's shift
+  station.update(h.context(), h.out);
+  EXPECT_FALSE(h.out.centring_stroke);
+  EXPECT_FALSE(second->centring_stroke_started);
+  h.in.centring_position_mm = 0.0F;  // home
+  station.update(h.context(), h.out);
+  EXPECT_TRUE(h.out.centring_stroke);
+  EXPECT_TRUE(second->centring_stroke_started);
+  // A third item reaches the window with the pusher out and leaves it before it is home.
+  h.in.centring_position_mm = -20.0F;
+  second->s_mm = unit_mm + 21.0F;
+  Item* third = h.tracker.create(0, unit_mm - 10.0F, false);
+  measured(third, 30.0F);
+  station.update(h.context(), h.out);
+  EXPECT_TRUE(second->centring_done);
+  EXPECT_FALSE(h.out.centring_stroke);
+  h.in.centring_position_mm = -5.0F;
+  third->s_mm = unit_mm + 21.0F;
+  station.update(h.context(), h.out);
+  EXPECT_TRUE(third->centring_done);
+  EXPECT_FALSE(third->centring_stroke_started);
+  EXPECT_FLOAT_EQ(third->y_mm, 30.0F) << "no stroke: where camera 2 saw it";
+}
+
 }  // namespace
 }  // namespace fl::logic
