@@ -240,11 +240,11 @@ TEST(DemPlantMultilane, TurningFilletsStayWhereTheyLieAcrossTheBelt) {
 // Off centre, the belt under most of the fillet holds it. 8 mm off at 15 degrees, the 176 mm
 // fillet turned further from the line turns 0.62 and 0.91 rad in 0.7 s (left, right hand),
 // turned back towards it 0.13 rad. Centred, the same fillet turns 0.39 to 0.90 rad either way
-// (the test above). A rigid body on these contacts does not turn back at all: its Coulomb
-// balance sticks to the one belt (rigid_coulomb_in_plane_velocity); the soft fillet's halves
-// give a little. So a fillet that
-// reaches the units off centre and has to come back towards the line hardly turns, whatever
-// the loop commands. Held here: back less than half of away, for both hands.
+// (the test above). A rigid body on these contacts does not turn at all, either way: its
+// Coulomb balance sticks to the belt under most of it (rigid_coulomb_in_plane_velocity, as
+// the fillet starts). The soft fillet turns because its halves shear and follow their belts.
+// So a fillet that reaches the units off centre and has to come back towards the line hardly
+// turns, whatever the loop commands. Held here: back less than half of away, for both hands.
 TEST(DemPlantMultilane, AnOffCentreFilletTurnsFurtherFromTheLineMoreReadilyThanBack) {
   constexpr double kDifferentialMps = 0.2;
   constexpr double kHeadingRad = 15.0 * std::numbers::pi / 180.0;
@@ -259,7 +259,8 @@ TEST(DemPlantMultilane, AnOffCentreFilletTurnsFurtherFromTheLineMoreReadilyThanB
     EXPECT_GT(away.turned_rad, 0.25);
     EXPECT_LT(back.turned_rad, 0.0);
     EXPECT_LT(-back.turned_rad, 0.5 * away.turned_rad);
-    // The rigid body sticks to the one belt either way (centred it turns at 0.87 rad/s).
+    // The rigid body sticks to the one belt either way (centred, free in the plane, it turns
+    // at 0.28 and 0.38 rad/s: DifferentialSpeedTurnsTheFilletAtMostAtTheRigidCoulombRate).
     EXPECT_LT(std::fabs(away.rigid_turn_radps), 0.01);
     EXPECT_LT(std::fabs(back.rigid_turn_radps), 0.01);
   }
