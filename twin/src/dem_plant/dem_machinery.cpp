@@ -16,14 +16,18 @@ constexpr double kMm = 1e-3;
 // A wall jump larger than this is placed directly instead of moved (park <-> stroke start).
 constexpr double kTeleportM = 0.005;
 
-// The centring plates (pusher or jaws) move at most a full stroke in line.yaml's stroke time,
-// and accelerate and brake at DemMachineryConfig::pusher_accel_mps2.
+// The centring plates (pusher or jaws) move at most a full stroke in line.yaml's stroke time
+// and accelerate at DemMachineryConfig::pusher_accel_mps2; the pusher brakes at
+// pusher_brake_mps2 (the jaws stop where they grip).
 double centring_top_speed_mmps(const LineConfig& line) {
   return line.centring.max_shift_mm /
          std::max(static_cast<double>(line.centring.stroke_time_s), 1e-6);
 }
 double centring_accel_mmps2(const DemMachineryConfig& machinery) {
   return std::max(static_cast<double>(machinery.pusher_accel_mps2), 1e-3) * 1000.0;
+}
+double centring_brake_mmps2(const DemMachineryConfig& machinery) {
+  return std::max(static_cast<double>(machinery.pusher_brake_mps2), 1e-3) * 1000.0;
 }
 
 }  // namespace
@@ -80,13 +84,18 @@ void DemPlant::step_pusher(double h_s, const OutputImage& out) {
   const double pusher_target_mm = out.centring_stroke && st.pusher_side != 0 ? shift_mm : 0.0;
   const double pusher_speed_mmps = centring_top_speed_mmps(line_);
   // Trapezoidal profile: top speed from the stroke time, acceleration and braking limited
-  // (DemMachineryConfig::pusher_accel_mps2). A plate that stops dead from full speed throws
-  // the fillet on by v^2 / (2 mu g), 25 mm at 0.5 m/s and mu 0.5.
+  // (DemMachineryConfig::pusher_accel_mps2, pusher_brake_mps2). A plate that brakes harder
+  // than friction can stop the fillet leaves it sliding on.
   const double accel_mmps2 = centring_accel_mmps2(config_.machinery);
+  const double brake_mmps2 = centring_brake_mmps2(config_.machinery);
   const double to_go_mm = pusher_target_mm - st.pusher_mm;
+  // The braking curve sets the speed wanted near the target; the rate limit lets it follow.
   const double wanted_mmps = std::copysign(
-      std::min(pusher_speed_mmps, std::sqrt(2.0 * accel_mmps2 * std::abs(to_go_mm))), to_go_mm);
-  st.pusher_speed_mmps = approach(st.pusher_speed_mmps, wanted_mmps, accel_mmps2 * h_s);
+      std::min(pusher_speed_mmps, std::sqrt(2.0 * brake_mmps2 * std::abs(to_go_mm))), to_go_mm);
+  const bool speeding_up = std::abs(wanted_mmps) > std::abs(st.pusher_speed_mmps) &&
+                           wanted_mmps * st.pusher_speed_mmps >= 0.0;
+  st.pusher_speed_mmps =
+      approach(st.pusher_speed_mmps, wanted_mmps, (speeding_up ? accel_mmps2 : brake_mmps2) * h_s);
   const double step_mm = st.pusher_speed_mmps * h_s;
   // Land exactly on the target instead of dithering around it at the last step.
   if (std::abs(step_mm) >= std::abs(to_go_mm) || std::abs(to_go_mm) < 1e-3) {

@@ -134,6 +134,7 @@ DemPlantConfig load_dem_plant_config(const std::filesystem::path& file) {
       m.pusher_height_mm = map.read_float("pusher_height_mm", Range::positive());
       m.pusher_window_half_mm = map.read_float("pusher_window_half_mm", Range::positive());
       m.pusher_accel_mps2 = map.read_float("pusher_accel_mps2", Range::positive());
+      m.pusher_brake_mps2 = map.read_float("pusher_brake_mps2", Range::positive());
       m.centring_unit = map.read_enum("centring_unit", kCentringUnits);
       m.jaw_grip_force_n = map.read_float("jaw_grip_force_n", Range::positive());
       m.jaw_min_half_gap_mm = map.read_float("jaw_min_half_gap_mm", Range::positive());

@@ -67,10 +67,14 @@ struct DemMachineryConfig {
   float pusher_half_length_mm = 100.0F;
   float pusher_height_mm = 60.0F;
   float pusher_window_half_mm = 60.0F;  // the fillet it strokes against, around the unit
-  // Acceleration and braking of the pusher (its top speed is max shift / stroke time). Under
-  // mu g of the fillet on the belt (0.5 x 9.81 = 4.9 m/s^2, config/dem.yaml), so that the
-  // fillet stops with the plate instead of sliding on: the real unit's servo profile.
+  // Acceleration of the centring plates (its top speed is max shift / stroke time).
   float pusher_accel_mps2 = 4.0F;
+  // Their braking. Under the deceleration friction gives a sliding fillet (3.2 to 4.8 m/s^2 by
+  // size and direction for the DEM fillet, whose bottom spheres roll; not the rigid mu g of
+  // 4.9) the fillet stops with the plate: 2.5 does so for every size. Over it, thick fillets
+  // slide on past the shift, which carries those beyond the stroke's reach further in: the
+  // shipped 4.0 does (docs/twin.md, "Why a pushed fillet slides on").
+  float pusher_brake_mps2 = 4.0F;
   DemCentringUnit centring_unit = DemCentringUnit::kPusher;
   // Jaws: each presses the fillet at least this hard before they stop closing; over the
   // fillet's sliding friction on the belt (mu m g, 0.5 x 0.3 kg x 9.81 = 1.5 N), which the one
