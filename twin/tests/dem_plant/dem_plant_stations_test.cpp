@@ -101,5 +101,42 @@ TEST(DemPlantStations, BrakingUnderTheSlidingDecelerationLeavesEverySizeOnTheCen
   EXPECT_GT(worst_mm(4.0F), 15.0);
 }
 
+// The pusher's profile: up at pusher_accel_mps2, down at pusher_brake_mps2, the peak under the
+// 0.5 m/s top speed for a 60 mm stroke at 4 and 2.5 m/s^2. The peak v solves
+// s = v^2 / (2 a) + v^2 / (2 b): v = 0.430 m/s, and the stroke takes v / a + v / b = 0.279 s;
+// at 4 both ways, 2 sqrt(s / a) = 0.245 s. The 1 ms steps land 11 to 12 ms early: the braking
+// rate limit lags the sqrt(2 b d) curve where it bends, in the last millimetre, so the plate
+// covers it at a few cm/s and stops from there.
+double full_stroke_s(float accel_mps2, float brake_mps2) {
+  DemPlantConfig config = test_config();
+  config.machinery.pusher_accel_mps2 = accel_mps2;
+  config.machinery.pusher_brake_mps2 = brake_mps2;
+  DemRig rig(config);
+  rig.run(0.2);
+  DemFilletSpawn spawn;
+  spawn.s_mm = rig.line.centring.s_mm;  // at the unit: the stroke engages at once
+  spawn.y_mm = 60.0;
+  spawn.v_mps = 0.5;
+  EXPECT_TRUE(rig.plant->spawn_fillet(spawn));
+  rig.out.centring_shift_mm = -60.0F;
+  rig.out.centring_stroke = true;
+  constexpr std::int64_t kStepNs = kMs;
+  for (int step = 1; step <= 1000; ++step) {
+    rig.step(kStepNs);
+    if (std::fabs(rig.in.centring_position_mm + 60.0F) < 1e-3F) return step * 1e-3;
+  }
+  return 1.0;
+}
+
+TEST(DemPlantStations, PusherAcceleratesAndBrakesEachAtItsOwnRate) {
+  const double gentle_s = full_stroke_s(4.0F, 2.5F);
+  const double symmetric_s = full_stroke_s(4.0F, 4.0F);
+  constexpr double kLandingS = 0.015;  // the early landing above, with a few steps to spare
+  EXPECT_NEAR(gentle_s, 0.279 - 0.5 * kLandingS, 0.5 * kLandingS);
+  EXPECT_NEAR(symmetric_s, 0.245 - 0.5 * kLandingS, 0.5 * kLandingS);
+  // The braking alone makes the difference: 34 ms, to within two 1 ms steps.
+  EXPECT_NEAR(gentle_s - symmetric_s, 0.279 - 0.245, 0.002);
+}
+
 }  // namespace
 }  // namespace fl::test
