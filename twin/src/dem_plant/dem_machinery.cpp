@@ -23,11 +23,9 @@ double centring_top_speed_mmps(const LineConfig& line) {
   return line.centring.max_shift_mm /
          std::max(static_cast<double>(line.centring.stroke_time_s), 1e-6);
 }
-double centring_accel_mmps2(const DemMachineryConfig& machinery) {
-  return std::max(static_cast<double>(machinery.pusher_accel_mps2), 1e-3) * 1000.0;
-}
-double centring_brake_mmps2(const DemMachineryConfig& machinery) {
-  return std::max(static_cast<double>(machinery.pusher_brake_mps2), 1e-3) * 1000.0;
+// A plate's acceleration or braking limit in mm/s^2, kept off zero.
+double plate_rate_mmps2(float limit_mps2) {
+  return std::max(static_cast<double>(limit_mps2), 1e-3) * 1000.0;
 }
 
 }  // namespace
@@ -86,8 +84,8 @@ void DemPlant::step_pusher(double h_s, const OutputImage& out) {
   // Trapezoidal profile: top speed from the stroke time, acceleration and braking limited
   // (DemMachineryConfig::pusher_accel_mps2, pusher_brake_mps2). A plate that brakes harder
   // than friction can stop the fillet leaves it sliding on.
-  const double accel_mmps2 = centring_accel_mmps2(config_.machinery);
-  const double brake_mmps2 = centring_brake_mmps2(config_.machinery);
+  const double accel_mmps2 = plate_rate_mmps2(config_.machinery.pusher_accel_mps2);
+  const double brake_mmps2 = plate_rate_mmps2(config_.machinery.pusher_brake_mps2);
   const double to_go_mm = pusher_target_mm - st.pusher_mm;
   // The braking curve sets the speed wanted near the target; the rate limit lets it follow.
   const double wanted_mmps = std::copysign(
@@ -137,7 +135,7 @@ void DemPlant::step_jaws(double h_s, const OutputImage& out) {
       st.jaw_speed_mps = 0.0;
     } else {
       st.jaw_speed_mps = approach(st.jaw_speed_mps, centring_top_speed_mmps(line_) * kMm,
-                                  centring_accel_mmps2(m) * kMm * h_s);
+                                  plate_rate_mmps2(m.pusher_accel_mps2) * kMm * h_s);
       st.jaw_half_gap_m = std::max(st.jaw_half_gap_m - st.jaw_speed_mps * h_s,
                                    static_cast<double>(m.jaw_min_half_gap_mm) * kMm);
     }
