@@ -122,6 +122,9 @@ struct Simulation::Impl {
   std::size_t max_cells = 0;   // cap on the grid, so that passes over cells stay O(particles)
   std::vector<std::uint32_t> cell_start;
   std::vector<std::uint32_t> cell_particles;
+  // positions in cell_particles' order: the candidate loop reads them in sequence, not
+  // scattered over the particle arrays between re-orderings
+  std::vector<Vec3> cell_position_m;
   std::vector<std::uint32_t> particle_cell;
   std::vector<std::uint32_t> pair_offsets;
   std::vector<std::uint32_t> old_pair_offsets;  // the last list's, while the next is built
@@ -430,6 +433,7 @@ void Simulation::prepare() {
   m.build_position_m.resize(n);
   m.particle_cell.resize(n);
   m.cell_particles.resize(n);
+  m.cell_position_m.resize(n);
   m.order.resize(n);
   m.new_of_old.resize(n);
   m.scratch_vec3.reserve(n);
@@ -775,6 +779,7 @@ void Simulation::rebuild_neighbors() {
     std::copy(m.order.begin(), m.order.begin() + static_cast<std::ptrdiff_t>(n),
               m.cell_particles.begin());
   }
+  for (std::size_t k = 0; k < n; ++k) m.cell_position_m[k] = s.position_m[m.cell_particles[k]];
 
   // 4. bonded partners (pairs excluded from contact unless configured)
   if (!m.partners_valid || m.partner_offsets.size() != n + 1) {
@@ -836,6 +841,10 @@ void Simulation::rebuild_neighbors() {
   for (std::size_t t = 0; t <= build_threads; ++t) {
     m.build_begin[t] = static_cast<std::uint32_t>(n * t / build_threads);
   }
+  // Every pair's reach is at most the cell size's (two of the largest radii, the largest range
+  // and the skin; IEEE addition is monotonic, so also as computed).
+  const double largest_reach_squared = m.min_cell_size * m.min_cell_size;
+  const Vec3* cell_position = m.cell_position_m.data();
 #pragma omp parallel num_threads(m.active_threads) if (m.active_threads > 1)
   {
     const auto t = static_cast<std::size_t>(omp_get_thread_num());
@@ -896,22 +905,24 @@ void Simulation::rebuild_neighbors() {
                 *cell_begin > i ? cell_begin : std::upper_bound(cell_begin, cell_end, i);
             // Most candidates fail the distance test, and half of them at random, so it is
             // folded into the count of a write that always happens: mispredicted branches were
-            // most of the list build's time on a line. The few kept ones are then checked for
-            // contact laws and bonds.
+            // most of the list build's time on a line. The test is against the largest reach
+            // (no type, radius or range to look up per candidate); the few kept ones are then
+            // tested against their own reach, for contact laws and for bonds.
             for (auto c = first; c < cell_end; ++c) {
-              const std::uint32_t j = *c;
-              const std::size_t pair_type = type_row + s.type[j];
-              const double reach = m.listing_reach_m(ri, s.radius_m[j], pair_type);
-              const bool keep = (xi - s.position_m[j]).squaredNorm() < reach * reach;
-              in_reach[in_reach_count] = j;
-              in_reach_count += keep ? 1U : 0U;
+              const auto slot = static_cast<std::size_t>(c - m.cell_particles.begin());
+              const bool near = (xi - cell_position[slot]).squaredNorm() < largest_reach_squared;
+              in_reach[in_reach_count] = *c;
+              in_reach_count += near ? 1U : 0U;
             }
           }
         }
       }
       for (std::uint32_t k = 0; k < in_reach_count; ++k) {
         const std::uint32_t j = in_reach[k];
-        const Interaction& interaction = *m.interactions[type_row + s.type[j]];
+        const std::size_t pair_type = type_row + s.type[j];
+        const double reach = m.listing_reach_m(ri, s.radius_m[j], pair_type);
+        if ((xi - s.position_m[j]).squaredNorm() >= reach * reach) continue;
+        const Interaction& interaction = *m.interactions[pair_type];
         if (!interaction.has_contact()) continue;
         if (!interaction.contact_between_bonded && stamp[j] == i + 1) continue;
         pair_j.push_back(j);
