@@ -115,6 +115,52 @@ void BM_FilletContactChain(benchmark::State& state) {
 }
 BENCHMARK(BM_FilletContactChain)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 
+// The bonded law's batch on its own, per bond: the race's 14 fillets (45,962 bpm bonds) settled,
+// then the bond pass of a step repeated on the frozen positions. The bond loop is most of the
+// bonded race's time; timed alone it is free of the rebuilds' and the contacts' share and of a
+// whole step's spread. The histories are restored every 50 passes (a pass adds one step's shear,
+// so fifty keep every bond under its strength); the restore is outside the timing.
+// Argument: the bond kernel (0 auto, 1 scalar).
+void BM_BondBatch(benchmark::State& state) {
+  const auto kernel = state.range(0) == 0 ? fl::dem::BondKernel::kAuto : fl::dem::BondKernel::kScalar;
+  auto sim = race::make_fillets(14, 1, false, 1000, kernel);
+  const fl::dem::State& settled = sim->state();
+  const fl::dem::BondLaw& law = *sim->model().interaction(0, 0).bond_law;
+  const std::vector<fl::dem::BondState> settled_states = settled.bond_states;
+  std::vector<fl::dem::BondState> states = settled_states;
+  std::vector<Vec3> force(settled.size(), Vec3::Zero());
+  std::vector<Vec3> torque(settled.size(), Vec3::Zero());
+  fl::dem::BondBatch batch;
+  batch.bonds = settled.bonds.data();
+  batch.states = states.data();
+  batch.end = static_cast<std::uint32_t>(settled.bonds.size());
+  batch.position_m = settled.position_m.data();
+  batch.velocity_m_per_s = settled.velocity_m_per_s.data();
+  batch.angular_velocity_rad_per_s = settled.angular_velocity_rad_per_s.data();
+  batch.radius_m = settled.radius_m.data();
+  batch.force_n = force.data();
+  batch.torque_nm = torque.data();
+  batch.timestep_s = race::kDt;
+  batch.kernel = kernel;
+  bool broke = false;
+  std::size_t passes = 0;
+  for (auto _ : state) {
+    if (passes++ % 50 == 0) {
+      state.PauseTiming();
+      states = settled_states;
+      state.ResumeTiming();
+    }
+    broke = law.compute_batch(batch) || broke;
+    benchmark::ClobberMemory();
+  }
+  if (broke) state.SkipWithError("a bond broke: the timing is not of the whole list");
+  const double bonds = static_cast<double>(batch.end) * static_cast<double>(state.iterations());
+  state.counters["bonds_per_s"] = benchmark::Counter(bonds, benchmark::Counter::kIsRate);
+  state.counters["seconds_per_bond"] =
+      benchmark::Counter(bonds, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_BondBatch)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
+
 }  // namespace
 
 BENCHMARK_MAIN();
