@@ -122,7 +122,8 @@ BENCHMARK(BM_FilletContactChain)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 // so fifty keep every bond under its strength); the restore is outside the timing.
 // Argument: the bond kernel (0 auto, 1 scalar).
 void BM_BondBatch(benchmark::State& state) {
-  const auto kernel = state.range(0) == 0 ? fl::dem::BondKernel::kAuto : fl::dem::BondKernel::kScalar;
+  const auto kernel =
+      state.range(0) == 0 ? fl::dem::BondKernel::kAuto : fl::dem::BondKernel::kScalar;
   auto sim = race::make_fillets(14, 1, false, 1000, kernel);
   const fl::dem::State& settled = sim->state();
   const fl::dem::BondLaw& law = *sim->model().interaction(0, 0).bond_law;

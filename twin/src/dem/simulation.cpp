@@ -172,8 +172,8 @@ struct Simulation::Impl {
   std::vector<std::uint64_t> mesh_moves;
   std::vector<std::uint64_t> mesh_moves_at_build;
   // Wall list (CSR per particle): the triangles within reach plus skin at the last build, by
-  // mesh then triangle, as (mesh, triangle). A particle moves at most half the skin before
-  // the next build, so no other triangle of an unmoved mesh can reach it.
+  // mesh then triangle, as (mesh, triangle). A particle moves at most the skin before the next
+  // build (step), so no other triangle of an unmoved mesh can reach it.
   std::vector<std::uint32_t> wall_list_offsets;
   std::vector<std::uint32_t> wall_list_mesh;
   std::vector<std::uint32_t> wall_list_triangle;
@@ -974,7 +974,7 @@ void Simulation::rebuild_neighbors() {
           // The box of a belt's triangle is the whole belt: the box alone lists both triangles
           // for every sphere on it, and the force loop then finds the far one's closest point
           // out of reach at every step. Listed by the distance itself, it is looked at once a
-          // build. The same contacts either way (a sphere moves at most half the skin).
+          // build. The same contacts either way (a sphere moves at most the skin).
           const auto& vertices = triangles[tri].vertices_m;
           const ClosestPoint cp =
               closest_point_on_triangle(xi, vertices[0], vertices[1], vertices[2]);
@@ -1412,7 +1412,8 @@ void Simulation::step(std::size_t count) {
   const double dt = m.dt;
   const double half_dt = 0.5 * dt;
   const Vec3 gravity = m.gravity;
-  const double trigger = 0.25 * m.skin * m.skin;  // (skin / 2)^2
+  const double skin_squared = m.skin * m.skin;
+  const bool wall_list_in_use = !spec.meshes.empty();
   bool walls_move = false;
   for (const WallState& w : s.walls) {
     walls_move = walls_move || !w.linear_velocity_m_per_s.isZero(0.0) ||
@@ -1429,9 +1430,19 @@ void Simulation::step(std::size_t count) {
     s.angular_velocity_rad_per_s[k] += half_dt * s.inverse_inertia_per_kg_m2[k] * s.torque_nm[k];
   };
   for (std::size_t iteration = 0; iteration < count; ++iteration) {
-    bool rebuild = m.rebuild_requested;
     const bool finish_previous = second_half_pending;
-#pragma omp parallel num_threads(m.active_threads) if (m.active_threads > 1) reduction(|| : rebuild)
+    // Displacements since the last build: the largest one's square and their bounding box.
+    // Reduced by min and max, which round nothing, so the same for any thread count.
+    constexpr double kInfinity = std::numeric_limits<double>::infinity();
+    double largest_squared = 0.0;
+    double low_x = kInfinity, low_y = kInfinity, low_z = kInfinity;
+    double high_x = -kInfinity, high_y = -kInfinity, high_z = -kInfinity;
+    // (unformatted: clang-format breaks the clauses inside their parentheses)
+    // clang-format off
+#pragma omp parallel num_threads(m.active_threads) if (m.active_threads > 1) \
+    reduction(max : largest_squared, high_x, high_y, high_z) \
+    reduction(min : low_x, low_y, low_z)
+    // clang-format on
     {
       // Equal shares of particles: a kick costs the same for each, unlike the contact loop's
       // work, whose ranges (particle_begin) give the thread holding the bottom of a pile fewer
@@ -1444,9 +1455,32 @@ void Simulation::step(std::size_t count) {
         if (finish_previous) half_kick(k);
         half_kick(k);
         s.position_m[k] += dt * s.velocity_m_per_s[k];
-        rebuild = rebuild || (s.position_m[k] - m.build_position_m[k]).squaredNorm() > trigger;
+        const Vec3 moved = s.position_m[k] - m.build_position_m[k];
+        largest_squared = std::max(largest_squared, moved.squaredNorm());
+        low_x = std::min(low_x, moved.x());
+        low_y = std::min(low_y, moved.y());
+        low_z = std::min(low_z, moved.z());
+        high_x = std::max(high_x, moved.x());
+        high_y = std::max(high_y, moved.y());
+        high_z = std::max(high_z, moved.z());
       }
     }
+    // The Verlet argument: a pair left out of the list was beyond its reach plus the skin at
+    // the build, so it cannot touch while its relative displacement |d_i - d_j| stays within
+    // the skin. Two bounds of it: twice the largest displacement (the usual half-skin rule)
+    // and the diagonal of the displacements' box, which is what moved relative to what. Fillets
+    // carried along together, or falling past resting ones, move the box's diagonal by their
+    // own displacement, half of what the half-skin rule counts. The wall list holds the
+    // triangles within reach plus skin of each sphere, and the walls do not move with the
+    // spheres: it holds while every sphere is within the skin of where it was built.
+    const double box_diagonal_squared = (high_x - low_x) * (high_x - low_x) +
+                                        (high_y - low_y) * (high_y - low_y) +
+                                        (high_z - low_z) * (high_z - low_z);
+    // (no particles: an empty box, and nothing moved)
+    const bool pairs_may_touch =
+        4.0 * largest_squared > skin_squared && box_diagonal_squared > skin_squared;
+    const bool walls_may_touch = wall_list_in_use && largest_squared > skin_squared;
+    const bool rebuild = m.rebuild_requested || pairs_may_touch || walls_may_touch;
     if (walls_move) {
       for (WallState& w : s.walls) {
         w.translation_m += dt * w.linear_velocity_m_per_s;
@@ -1472,7 +1506,6 @@ void Simulation::step(std::size_t count) {
 #pragma omp parallel for num_threads(m.active_threads) if (m.active_threads > 1) schedule(static)
     for (std::size_t k = 0; k < n; ++k) half_kick(k);
   }
-  (void)spec;
 }
 
 // ------------------------------------------------------------------------------- reports

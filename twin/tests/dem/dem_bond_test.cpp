@@ -112,8 +112,8 @@ TEST(DemBond, BreaksBeyondContactRadii) {
 
 // A bond torn within contact reach frees a pair that is about to touch: the neighbour list must
 // take it in at once. Two spheres 0.4 mm apart, bonded, close at 0.1 m/s; a tiny shear strength
-// breaks the bond in the first steps. They meet 4 ms later, having moved 0.2 mm each: less than
-// the half skin (0.5 mm) that would rebuild the list anyway. So a late listing shows as a
+// breaks the bond in the first steps. They meet 4 ms later, having closed 0.4 mm: less than the
+// skin (1 mm) that would rebuild the list anyway. So a late listing shows as a
 // deeper first overlap; a prompt one gives Hertz' maximum overlap for a central impact,
 // delta = (15 m* v^2 / (16 E* sqrt(R*)))^(2/5) (Johnson, Contact Mechanics, 11.2), about 0.11 mm.
 TEST(DemBond, PairFreedWithinReachCollidesAsHertzSays) {

@@ -207,7 +207,7 @@ TEST(BulkCounting, ASphereFallenUnderTheSceneIsHeldStill) {
   const std::uint64_t rebuilds = scene.simulation().stats().neighbor_rebuilds;
   scene.step(0.5);
   // Held: in each 2 ms control step it regains only g h = 0.02 m/s and sinks g h^2 / 2 = 0.02 mm,
-  // 5 mm in 0.5 s; falling on it would have gone 1.7 m (850 rebuilds at a 2 mm half skin).
+  // 5 mm in 0.5 s; falling on it would have gone 1.7 m (425 rebuilds at the 4 mm skin).
   EXPECT_LT(scene.simulation().state().velocity_m_per_s[0].norm(), 0.03);
   EXPECT_GT(scene.simulation().state().position_m[0].z(), -0.31);
   EXPECT_LE(scene.simulation().stats().neighbor_rebuilds - rebuilds, 3U);

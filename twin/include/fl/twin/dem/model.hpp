@@ -77,7 +77,7 @@ struct ModelSpec {
   Vec3 gravity_m_per_s2 = Vec3(0.0, 0.0, -9.81);
   double timestep_s = 1.678512e-4;
   Domain domain;
-  double neighbor_skin_m = 0.001;  // Verlet skin; rebuild when a particle moved skin/2
+  double neighbor_skin_m = 0.001;  // Verlet skin (rebuild rule: simulation.hpp)
   int thread_count = 1;            // at most; results are bit-identical for a fixed count
   // Threads only pay once each has this many particles: below, a fork/join and the barrier
   // spin cost more than the work (a 400-sphere line ran 3x slower on 2 threads than on 1).

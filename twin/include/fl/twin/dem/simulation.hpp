@@ -1,8 +1,10 @@
 // dem::Simulation: the DEM engine. Owns a State, shares an immutable Model, and advances the
 // state with velocity Verlet (translation and rotation; spheres with scalar inertia).
 //
-// Per step: half kick, drift, wall motion, neighbour-list check (Verlet skin: rebuild when a
-// particle moved more than skin/2 or a bond broke), forces (pairs, bonds, walls), half kick.
+// Per step: half kick, drift, wall motion, neighbour-list check (Verlet skin: rebuild when two
+// particles may have closed by more than the skin since the build, a particle moved more than
+// the skin where meshes are listed, or a bond broke within reach), forces (pairs, bonds, walls),
+// half kick.
 //
 // Threads: up to `ModelSpec::thread_count` OpenMP threads, one per
 // `ModelSpec::min_particles_per_thread` particles. Each thread owns a contiguous range of

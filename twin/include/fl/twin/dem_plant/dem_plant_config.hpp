@@ -26,7 +26,7 @@ struct DemSimulationConfig {
   // Timestep as a share of the sub-particle's Rayleigh time (appendix B: 15 %).
   float rayleigh_fraction = 0.15F;
   // Verlet skin: a larger skin rebuilds the neighbour list less often on the moving belts
-  // (every skin/2 of travel) at the price of longer lists.
+  // (every skin of travel past the line's meshes) at the price of longer lists.
   float neighbor_skin_mm = 4.0F;
   int thread_count = 2;  // results are bit-identical for a fixed count
   // A second thread from twice this many spheres. A line's few hundred to two thousand spheres
