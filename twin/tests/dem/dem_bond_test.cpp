@@ -137,12 +137,7 @@ TEST(DemBond, PairFreedWithinReachCollidesAsHertzSays) {
     max_overlap = std::max(max_overlap, 2.0 * kRadius - distance);
   }
   ASSERT_TRUE(sim.state().bond_states[0].broken);
-  const double reduced_mass = test::sphere_mass() / 2.0;
-  const double reduced_radius = kRadius / 2.0;
-  const double reduced_modulus = test::kYoungs / (2.0 * (1.0 - test::kPoisson * test::kPoisson));
-  const double hertz_overlap = std::pow(15.0 * reduced_mass * closing_speed * closing_speed /
-                                            (16.0 * reduced_modulus * std::sqrt(reduced_radius)),
-                                        0.4);
+  const double hertz_overlap = test::hertz_peak_overlap_m(closing_speed);
   // 2 %: the sliding part and the step's discretisation. A listing delayed to the skin trigger
   // lets the spheres pass 0.5 mm into each other first (0.6 mm peak overlap when tried).
   EXPECT_NEAR(max_overlap, hertz_overlap, 0.02 * hertz_overlap);

@@ -319,12 +319,7 @@ TEST(DemNeighbourList, PairClosingWithinACommonDriftMeetsAsHertzSays) {
     max_overlap = std::max(max_overlap, 2.0 * kRadius - distance);
   }
   ASSERT_GT(max_overlap, 0.0);
-  const double reduced_mass = test::sphere_mass() / 2.0;
-  const double reduced_radius = kRadius / 2.0;
-  const double reduced_modulus = test::kYoungs / (2.0 * (1.0 - test::kPoisson * test::kPoisson));
-  const double hertz_overlap = std::pow(15.0 * reduced_mass * closing_speed * closing_speed /
-                                            (16.0 * reduced_modulus * std::sqrt(reduced_radius)),
-                                        0.4);
+  const double hertz_overlap = test::hertz_peak_overlap_m(closing_speed);
   EXPECT_NEAR(max_overlap, hertz_overlap, 0.02 * hertz_overlap);
   // the impact was elastic (e = 1): sphere 0 bounced back
   EXPECT_LT(sim.state().velocity_m_per_s[0].x(), 0.0);

@@ -20,6 +20,18 @@ inline double sphere_mass(double radius = kRadius) {
   return kDensity * 4.0 / 3.0 * 3.14159265358979323846 * radius * radius * radius;
 }
 
+// Hertz' maximum overlap for a central impact of two kRadius spheres of the test material
+// closing at `closing_speed_mps`, without damping: delta = (15 m* v^2 / (16 E* sqrt(R*)))^(2/5)
+// (Johnson, Contact Mechanics, 11.2), with m* = m/2, R* = r/2 and E* = E / (2 (1 - nu^2)).
+inline double hertz_peak_overlap_m(double closing_speed_mps) {
+  const double reduced_mass = sphere_mass() / 2.0;
+  const double reduced_radius = kRadius / 2.0;
+  const double reduced_modulus = kYoungs / (2.0 * (1.0 - kPoisson * kPoisson));
+  return std::pow(15.0 * reduced_mass * closing_speed_mps * closing_speed_mps /
+                      (16.0 * reduced_modulus * std::sqrt(reduced_radius)),
+                  0.4);
+}
+
 // One fillet material; type 0 "ball", type 1 "wall" (same material). `ball_laws` applies to
 // ball-ball and ball-wall pairs.
 inline ModelSpec ball_model(std::vector<LawSpec> ball_laws, double timestep_s,
