@@ -1468,11 +1468,11 @@ void Simulation::step(std::size_t count) {
     // The Verlet argument: a pair left out of the list was beyond its reach plus the skin at
     // the build, so it cannot touch while its relative displacement |d_i - d_j| stays within
     // the skin. Two bounds of it: twice the largest displacement (the usual half-skin rule)
-    // and the diagonal of the displacements' box, which is what moved relative to what. Fillets
-    // carried along together, or falling past resting ones, move the box's diagonal by their
-    // own displacement, half of what the half-skin rule counts. The wall list holds the
-    // triangles within reach plus skin of each sphere, and the walls do not move with the
-    // spheres: it holds while every sphere is within the skin of where it was built.
+    // and the diagonal of the displacements' box, which is what moved relative to what. A load
+    // carried along as a whole widens the box by nothing; fillets falling past resting ones
+    // widen it by their own displacement, half of what the half-skin rule counts. The wall list
+    // holds the triangles within reach plus skin of each sphere, and the walls do not move with
+    // the spheres: it holds while every sphere is within the skin of where it was built.
     const double box_diagonal_squared = (high_x - low_x) * (high_x - low_x) +
                                         (high_y - low_y) * (high_y - low_y) +
                                         (high_z - low_z) * (high_z - low_z);
