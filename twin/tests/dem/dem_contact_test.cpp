@@ -289,8 +289,8 @@ TEST(DemNeighbourList, LoadCarriedAsAWholeKeepsItsList) {
   }
   sim.step();
   const std::uint64_t after_first = sim.stats().neighbor_rebuilds;
-  sim.step(2000);  // 20 mm
-  EXPECT_NEAR(sim.state().position_m[0].x(), 0.02 + dt, 1e-9);
+  sim.step(2000);  // 20 mm; with the first step, 2001 steps at 1 m/s
+  EXPECT_NEAR(sim.state().position_m[0].x(), velocity.x() * 2001 * dt, 1e-9);
   EXPECT_EQ(sim.stats().neighbor_rebuilds, after_first);
   EXPECT_EQ(sim.stats().touching_pairs, 0U);  // 0.5 mm apart all the way
 }
@@ -300,8 +300,7 @@ TEST(DemNeighbourList, LoadCarriedAsAWholeKeepsItsList) {
 // list must be rebuilt on their closing, not on the drift, and before they touch (at 0.5 mm
 // apart; a rule that waited for twice the skin would rebuild at 1.5 mm and -0.5 mm). A late
 // listing lets them pass into each other; a prompt one gives Hertz' maximum overlap for a central
-// impact without damping,
-// delta = (15 m* v^2 / (16 E* sqrt(R*)))^(2/5) (Johnson, Contact Mechanics, 11.2), 0.11 mm.
+// impact without damping (test::hertz_peak_overlap_m), 0.11 mm.
 TEST(DemNeighbourList, PairClosingWithinACommonDriftMeetsAsHertzSays) {
   const double dt = 1e-5;  // 1 um of closing per step: the peak resolved to about 1 %
   Simulation sim(std::make_shared<Model>(test::ball_model({test::hertz(1.0)}, dt)));
